@@ -1,0 +1,139 @@
+// The DEM world: a const model (materials, walls, step size) and a mutable particle state, advanced
+// by Step(). Public header of the dem module; everything in dem/internal_*.h is private to dem/.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "dem/material.h"
+#include "dem/vec3.h"
+
+namespace dem {
+
+// An infinite plane wall: particles live on the side the normal points to.
+struct Plane {
+  std::string name;
+  Vec3 point;      // a point on the plane [m]
+  Vec3 normal;     // unit normal into the particle side [-]
+  int material = 0;
+};
+
+struct SystemConfig {
+  Vec3 gravity{0, 0, -9.81};  // [m/s^2]
+  double time_step = 0;       // [s]
+  double skin = 0;            // Verlet-list skin [m]; the list is rebuilt when a particle has
+                              // moved more than skin/2 since the last build
+  Vec3 domain_min, domain_max;  // box that holds every particle; sets the cell grid [m]
+  std::vector<Plane> planes;
+  // Health limits (Step() reports, the caller decides to stop).
+  double max_speed = 100.0;          // runaway speed [m/s]; knob: time step, restitution
+  double max_overlap_fraction = 0.05;  // overlap / smaller diameter; knob: time step, stiffness
+};
+
+// Persistent state of one contact, keyed by the persistent ids of its two sides. `b` is a particle
+// id, or -1 - k for plane k. `shear` is the Mindlin tangential spring displacement [m] as seen by a.
+struct ContactRecord {
+  int64_t a = 0;
+  int64_t b = 0;
+  Vec3 shear;
+};
+
+// Health of a step (STYLE.md habit 8). Flags are a bit mask; `particle` and `time` locate the first
+// offence and `message` says what happened and which knob to turn.
+enum StepFlag : uint32_t {
+  kStepOk = 0,
+  kNonFinite = 1u << 0,          // NaN/inf in a position or velocity: lower time_step
+  kExcessiveOverlap = 1u << 1,   // overlap above max_overlap_fraction: lower time_step or raise G
+  kRunawaySpeed = 1u << 2,       // speed above max_speed: lower time_step, check restitution <= 1
+  kLeftDomain = 1u << 3,         // particle outside domain_min..domain_max: add walls or enlarge
+};
+struct StepStatus {
+  uint32_t flags = kStepOk;
+  int64_t particle = -1;  // persistent id of the first offending particle
+  double time = 0;        // simulated time of the offence [s]
+  std::string message;
+  bool ok() const { return flags == kStepOk; }
+};
+
+// Per-particle state, one contiguous array per field, in storage order. Storage order changes when
+// the neighbour list reorders particles for locality; `id` is the persistent identity.
+struct Particles {
+  std::vector<int64_t> id;           // persistent id (N)
+  std::vector<Vec3> x;               // centre [m] (N)
+  std::vector<Vec3> v;               // velocity [m/s] (N)
+  std::vector<Vec3> w;               // angular velocity [rad/s] (N)
+  std::vector<Vec3> f;               // force of the last step [N] (N)
+  std::vector<Vec3> t;               // torque of the last step [N m] (N)
+  std::vector<double> radius;        // [m] (N)
+  std::vector<double> mass;          // [kg] (N)
+  std::vector<double> inv_mass;      // [1/kg] (N)
+  std::vector<double> inv_inertia;   // 1 / (2/5 m r^2) [1/(kg m^2)] (N)
+  std::vector<int32_t> material;     // index into the MaterialTable (N)
+  size_t size() const { return id.size(); }
+};
+
+struct NeighborStats {
+  int64_t builds = 0;          // neighbour-list builds so far
+  int64_t pairs = 0;           // half-list pairs (within cutoff + skin) at the last build
+  int64_t contacts = 0;        // particle-particle pairs in contact after the last step
+  int64_t wall_contacts = 0;   // particle-plane contacts after the last step
+};
+
+class System {
+ public:
+  System(MaterialTable materials, SystemConfig config);
+  ~System();
+  System(const System&) = delete;
+  System& operator=(const System&) = delete;
+
+  void Reserve(size_t n);
+  // Adds a sphere; returns its persistent id. Mass and inertia come from the material density.
+  int64_t AddParticle(const Vec3& x, const Vec3& v, const Vec3& w, double radius, int material);
+  // Removes the particles whose persistent ids are listed (with their contacts).
+  void RemoveParticles(const std::vector<int64_t>& ids);
+
+  // Advances one time step (velocity Verlet). Never throws; reports its health.
+  StepStatus Step();
+
+  const MaterialTable& materials() const { return materials_; }
+  const SystemConfig& config() const { return config_; }
+  const Particles& particles() const { return p_; }
+  Particles& mutable_particles() { return p_; }  // positions/velocities only; call Touch() after
+  void Touch();  // forces a neighbour-list rebuild before the next step
+  double time() const { return time_; }
+  void set_time(double t) { time_ = t; }
+  int64_t step_count() const { return step_count_; }
+  NeighborStats neighbor_stats() const;
+  // Force exerted by the particles on plane k during the last step [N].
+  Vec3 plane_force(int k) const { return plane_force_[k]; }
+
+  // Contact history, for saving and restoring a bed bit for bit.
+  std::vector<ContactRecord> Contacts() const;
+  void SetContacts(const std::vector<ContactRecord>& contacts);
+
+  // Totals over all particles, summed in persistent-id order.
+  double KineticEnergy() const;   // translational + rotational [J]
+  double PotentialEnergy() const; // -m g . x [J]
+  double ElasticEnergy() const;   // normal Hertz energy 2/5 k delta^(5/2) of current contacts [J]
+  Vec3 Momentum() const;          // [kg m/s]
+  // FNV-1a 64 hash of (id, x, v, w, radius, material) in persistent-id order and of the time.
+  uint64_t StateHash() const;
+
+  void set_num_threads(int n) { num_threads_ = n; }
+  int num_threads() const { return num_threads_; }
+
+ private:
+  struct Impl;
+  MaterialTable materials_;
+  SystemConfig config_;
+  Particles p_;
+  std::vector<Vec3> plane_force_;
+  double time_ = 0;
+  int64_t step_count_ = 0;
+  int64_t next_id_ = 0;
+  int num_threads_ = 1;
+  Impl* impl_;
+};
+
+}  // namespace dem

@@ -1,0 +1,64 @@
+// Scenes: YAML files in SI units, validated in full at load. Every error names the file, the line,
+// the key and what was expected: "scenes/x.yaml:12: bed.radius: expected a number > 0, got -1".
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "dem/material.h"
+#include "dem/vec3.h"
+
+namespace sim {
+
+// Bad user input (scene, materials file, CLI value). what() is the one-line message to print;
+// the CLI exits with status 2.
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// How the bed is made (fill + settle) or where a saved one is loaded from.
+struct BedSpec {
+  std::string material;          // particle material name (key bed.material)
+  double radius_min = 0;         // [m] radii are uniform in [radius_min, radius_max]
+  double radius_max = 0;         // [m] (bed.radius: r sets both; bed.radius: [a, b] a range)
+  int64_t count = 0;             // number of particles
+  uint64_t seed = 1;             // insertion RNG seed
+  double fill_fraction = 0.35;   // solid fraction of the random insertion layers [-]
+  double settle_ke = 1e-9;       // settled when mean kinetic energy per particle < this [J]
+  double settle_max_time = 5.0;  // give up settling after this simulated time [s]
+  std::string file;              // saved bed to load instead of making one (path as written,
+                                 // resolved against the scene's folder); "" = make one
+};
+
+struct OutputSpec {
+  double interval = 1e-3;       // time between rows of the time series [s]
+  int64_t snapshot_every = 0;   // particle snapshot every N steps; 0 = none
+  double flush_seconds = 10.0;  // wall-clock flush period [s]
+};
+
+struct Scene {
+  std::string path;       // the scene file as given
+  std::string yaml_text;  // its full text (stored as the HDF5 attribute scene_yaml)
+  std::string materials_path;
+  dem::MaterialTable materials;
+  dem::Vec3 gravity{0, 0, -9.81};  // [m/s^2]
+  double rayleigh_fraction = 0.2;  // dt / t_R, in (0, 0.3]
+  double time_step = 0;            // [s] derived: rayleigh_fraction * t_R(smallest radius)
+  double skin = 0;                 // Verlet skin [m]; default 0.25 * smallest diameter
+  dem::Vec3 box_min, box_max;      // container [m]: floor and four side walls, open top
+  std::string wall_material;       // material of the container walls
+  BedSpec bed;
+  double duration = 0;             // simulated time of `scoopsim run` [s]
+  OutputSpec output;
+  int threads = 0;                 // 0 = all cores (CLI --threads overrides)
+};
+
+// Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.
+Scene LoadScene(const std::string& path);
+
+// Loads a materials file into `table` (materials and their pair interactions). Throws InputError.
+void LoadMaterials(const std::string& path, dem::MaterialTable* table);
+
+}  // namespace sim

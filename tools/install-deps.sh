@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs every Debian package scoopsim needs. Idempotent; runs as root or through sudo.
+set -euo pipefail
+PKGS=(
+  build-essential cmake pkg-config git
+  libeigen3-dev libyaml-cpp-dev libcli11-dev libhdf5-dev zlib1g-dev
+  libgtest-dev googletest
+  python3 python3-numpy python3-h5py python3-matplotlib
+  liggghts openmpi-bin
+)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PKGS[@]} packages present"
+  exit 0
+fi
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
