@@ -1,1 +1,601 @@
-// placeholder
+#include "dem/system.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "dem/contact.h"
+#include "dem/neighbor.h"
+
+namespace dem {
+
+// Private state of the System: contact constants, neighbour list, contact history.
+struct System::Impl {
+  std::vector<PairConstants> pair;  // material pair constants (nm x nm)
+  std::vector<PairConstants> wall;  // particle material x plane (nm x num_planes)
+  NeighborList list;
+  bool list_valid = false;     // list indices refer to the current storage
+  bool needs_rebuild = true;
+  std::vector<Vec3> shear;     // tangential history of each list pair [m] (num_pairs)
+  std::vector<Vec3> x_build;   // positions at the last build [m] (N)
+  double skin = 0;
+  double cutoff_radius = 0;    // largest radius the grid was set up for [m]
+  size_t grid_capacity = 0;    // particle count the grid was sized for
+
+  // Particle-plane contacts near enough to matter (rebuilt with the list), sorted by particle.
+  std::vector<int32_t> wall_i;      // particle index
+  std::vector<int32_t> wall_k;      // plane index
+  std::vector<Vec3> wall_shear;     // tangential history [m]
+  std::vector<Vec3> wall_f, wall_t; // force and torque on the particle this step [N], [N m]
+
+  std::vector<ContactRecord> pending;  // history to apply at the next build
+  std::vector<int32_t> perm, visit, index_of_id;
+  std::vector<double> scratch_d;
+  std::vector<int64_t> scratch_i64;
+  std::vector<int32_t> scratch_i32;
+  std::vector<Vec3> scratch_v;
+
+  // Per-slab reductions of the force pass (fixed slots, so results do not depend on threads).
+  std::vector<double> slab_overlap;  // largest overlap / smaller diameter
+  std::vector<int64_t> slab_contacts;
+  int64_t contacts = 0, wall_contacts = 0;
+  double max_overlap = 0;
+};
+
+System::System(MaterialTable materials, SystemConfig config)
+    : materials_(std::move(materials)), config_(std::move(config)), impl_(new Impl) {
+  const int nm = materials_.size();
+  impl_->pair.resize(nm * nm);
+  for (int a = 0; a < nm; ++a)
+    for (int b = 0; b < nm; ++b)
+      impl_->pair[a * nm + b] =
+          MakePairConstants(materials_[a], materials_[b], materials_.interaction(a, b));
+  const int np = static_cast<int>(config_.planes.size());
+  impl_->wall.resize(nm * np);
+  for (int a = 0; a < nm; ++a)
+    for (int k = 0; k < np; ++k) {
+      const int wm = config_.planes[k].material;
+      impl_->wall[a * np + k] =
+          MakePairConstants(materials_[a], materials_[wm], materials_.interaction(a, wm));
+    }
+  plane_force_.assign(np, Vec3{});
+  impl_->skin = config_.skin;
+  num_threads_ = omp_get_max_threads();
+}
+
+System::~System() { delete impl_; }
+
+void System::Reserve(size_t n) {
+  p_.id.reserve(n);
+  p_.x.reserve(n);
+  p_.v.reserve(n);
+  p_.w.reserve(n);
+  p_.f.reserve(n);
+  p_.t.reserve(n);
+  p_.radius.reserve(n);
+  p_.mass.reserve(n);
+  p_.inv_mass.reserve(n);
+  p_.inv_inertia.reserve(n);
+  p_.material.reserve(n);
+}
+
+int64_t System::AddParticle(const Vec3& x, const Vec3& v, const Vec3& w, double radius,
+                            int material) {
+  const double mass = materials_[material].density * 4.0 / 3.0 * M_PI * radius * radius * radius;
+  const int64_t id = next_id_++;
+  p_.id.push_back(id);
+  p_.x.push_back(x);
+  p_.v.push_back(v);
+  p_.w.push_back(w);
+  p_.f.push_back(mass * config_.gravity);  // force before the first step: gravity alone
+  p_.t.push_back(Vec3{});
+  p_.radius.push_back(radius);
+  p_.mass.push_back(mass);
+  p_.inv_mass.push_back(1.0 / mass);
+  p_.inv_inertia.push_back(1.0 / (0.4 * mass * radius * radius));
+  p_.material.push_back(material);
+  impl_->needs_rebuild = true;  // existing list indices stay valid: new particles come last
+  return id;
+}
+
+void System::RemoveParticles(const std::vector<int64_t>& ids) {
+  if (ids.empty()) return;
+  std::vector<char> gone(next_id_, 0);
+  for (int64_t id : ids)
+    if (id >= 0 && id < next_id_) gone[id] = 1;
+  std::vector<ContactRecord> keep;
+  for (const ContactRecord& c : Contacts())
+    if (!gone[c.a] && (c.b < 0 || !gone[c.b])) keep.push_back(c);
+  size_t out = 0;
+  for (size_t i = 0; i < p_.size(); ++i) {
+    if (gone[p_.id[i]]) continue;
+    p_.id[out] = p_.id[i];
+    p_.x[out] = p_.x[i];
+    p_.v[out] = p_.v[i];
+    p_.w[out] = p_.w[i];
+    p_.f[out] = p_.f[i];
+    p_.t[out] = p_.t[i];
+    p_.radius[out] = p_.radius[i];
+    p_.mass[out] = p_.mass[i];
+    p_.inv_mass[out] = p_.inv_mass[i];
+    p_.inv_inertia[out] = p_.inv_inertia[i];
+    p_.material[out] = p_.material[i];
+    ++out;
+  }
+  p_.id.resize(out);
+  p_.x.resize(out);
+  p_.v.resize(out);
+  p_.w.resize(out);
+  p_.f.resize(out);
+  p_.t.resize(out);
+  p_.radius.resize(out);
+  p_.mass.resize(out);
+  p_.inv_mass.resize(out);
+  p_.inv_inertia.resize(out);
+  p_.material.resize(out);
+  impl_->pending = std::move(keep);
+  impl_->list_valid = false;
+  impl_->needs_rebuild = true;
+}
+
+void System::Touch() { impl_->needs_rebuild = true; }
+
+NeighborStats System::neighbor_stats() const {
+  NeighborStats s;
+  s.builds = builds_;
+  s.pairs = static_cast<int64_t>(impl_->list.num_pairs());
+  s.contacts = impl_->contacts;
+  s.wall_contacts = impl_->wall_contacts;
+  return s;
+}
+
+namespace {
+
+template <typename T>
+void Permute(std::vector<T>& a, const std::vector<int32_t>& perm, std::vector<T>& scratch) {
+  scratch.resize(a.size());
+  for (size_t i = 0; i < perm.size(); ++i) scratch[i] = a[perm[i]];
+  a.swap(scratch);
+}
+
+}  // namespace
+
+std::vector<ContactRecord> System::Contacts() const {
+  std::vector<ContactRecord> out;
+  const Impl& m = *impl_;
+  if (m.list_valid) {
+    const size_t n_listed = m.list.start.empty() ? 0 : m.list.start.size() - 1;
+    for (size_t i = 0; i < n_listed; ++i)
+      for (int32_t k = m.list.start[i]; k < m.list.start[i + 1]; ++k)
+        if (Norm2(m.shear[k]) > 0.0)
+          out.push_back({p_.id[i], p_.id[m.list.partner[k]], m.shear[k]});
+    for (size_t e = 0; e < m.wall_i.size(); ++e)
+      if (Norm2(m.wall_shear[e]) > 0.0)
+        out.push_back({p_.id[m.wall_i[e]], -1 - static_cast<int64_t>(m.wall_k[e]),
+                       m.wall_shear[e]});
+  }
+  out.insert(out.end(), m.pending.begin(), m.pending.end());
+  std::sort(out.begin(), out.end(), [](const ContactRecord& l, const ContactRecord& r) {
+    return l.a != r.a ? l.a < r.a : l.b < r.b;
+  });
+  return out;
+}
+
+void System::SetContacts(const std::vector<ContactRecord>& contacts) {
+  // Replaces all history: the next build takes it from these records only.
+  impl_->pending = contacts;
+  impl_->list_valid = false;
+  impl_->needs_rebuild = true;
+}
+
+void System::Rebuild() {
+  Impl& m = *impl_;
+  const size_t n = p_.size();
+  // 1. Keep the history of the current contacts by persistent id.
+  if (m.list_valid) {
+    std::vector<ContactRecord> records = Contacts();  // includes pending
+    m.pending.swap(records);
+  }
+  // 2. Grid sized for the present particles; reorder storage by cell, ties by persistent id.
+  double r_max = 0;
+  for (double r : p_.radius) r_max = std::max(r_max, r);
+  if (r_max > m.cutoff_radius || n > 2 * m.grid_capacity || n < m.grid_capacity / 4) {
+    m.cutoff_radius = r_max;
+    m.grid_capacity = std::max<size_t>(n, 1);
+    m.list.SetupGrid(config_.domain_min, config_.domain_max, 2 * r_max + m.skin, n);
+  }
+  m.index_of_id.assign(next_id_, -1);
+  for (size_t i = 0; i < n; ++i) m.index_of_id[p_.id[i]] = static_cast<int32_t>(i);
+  m.visit.clear();
+  for (int64_t id = 0; id < next_id_; ++id)
+    if (m.index_of_id[id] >= 0) m.visit.push_back(m.index_of_id[id]);
+  m.list.ComputeOrder(p_.x.data(), m.visit, &m.perm);
+  Permute(p_.id, m.perm, m.scratch_i64);
+  Permute(p_.x, m.perm, m.scratch_v);
+  Permute(p_.v, m.perm, m.scratch_v);
+  Permute(p_.w, m.perm, m.scratch_v);
+  Permute(p_.f, m.perm, m.scratch_v);
+  Permute(p_.t, m.perm, m.scratch_v);
+  Permute(p_.radius, m.perm, m.scratch_d);
+  Permute(p_.mass, m.perm, m.scratch_d);
+  Permute(p_.inv_mass, m.perm, m.scratch_d);
+  Permute(p_.inv_inertia, m.perm, m.scratch_d);
+  Permute(p_.material, m.perm, m.scratch_i32);
+  for (size_t i = 0; i < n; ++i) m.index_of_id[p_.id[i]] = static_cast<int32_t>(i);
+
+  // 3. Particle pairs and particle-plane candidates within reach (+ skin).
+  m.list.Build(p_.x.data(), p_.radius.data(), n, m.skin, num_threads_);
+  m.shear.assign(m.list.num_pairs(), Vec3{});
+  m.wall_i.clear();
+  m.wall_k.clear();
+  for (size_t i = 0; i < n; ++i)
+    for (size_t k = 0; k < config_.planes.size(); ++k) {
+      const Plane& pl = config_.planes[k];
+      if (Dot(p_.x[i] - pl.point, pl.normal) < p_.radius[i] + m.skin) {
+        m.wall_i.push_back(static_cast<int32_t>(i));
+        m.wall_k.push_back(static_cast<int32_t>(k));
+      }
+    }
+  m.wall_shear.assign(m.wall_i.size(), Vec3{});
+  m.wall_f.resize(m.wall_i.size());
+  m.wall_t.resize(m.wall_i.size());
+
+  // 4. Put the kept history back on the new entries (sign flips if the pair's owner changed).
+  for (const ContactRecord& c : m.pending) {
+    if (c.a < 0 || c.a >= next_id_) continue;
+    const int32_t ia = m.index_of_id[c.a];
+    if (ia < 0) continue;
+    if (c.b >= 0) {
+      if (c.b >= next_id_ || m.index_of_id[c.b] < 0) continue;
+      const int32_t ib = m.index_of_id[c.b];
+      const int32_t owner = std::min(ia, ib), other = std::max(ia, ib);
+      for (int32_t k = m.list.start[owner]; k < m.list.start[owner + 1]; ++k)
+        if (m.list.partner[k] == other) {
+          m.shear[k] = owner == ia ? c.shear : -c.shear;
+          break;
+        }
+    } else {
+      const int32_t plane = static_cast<int32_t>(-1 - c.b);
+      auto it = std::lower_bound(m.wall_i.begin(), m.wall_i.end(), ia);
+      for (; it != m.wall_i.end() && *it == ia; ++it) {
+        const size_t e = it - m.wall_i.begin();
+        if (m.wall_k[e] == plane) m.wall_shear[e] = c.shear;
+      }
+    }
+  }
+  m.pending.clear();
+  m.x_build = p_.x;
+  m.list_valid = true;
+  m.needs_rebuild = false;
+  ++builds_;
+}
+
+void System::ComputeForces() {
+  Impl& m = *impl_;
+  const size_t n = p_.size();
+  const double dt = config_.time_step;
+  const Vec3 g = config_.gravity;
+  const int nm = materials_.size();
+  const int nslabs = m.list.num_slabs();
+  m.slab_overlap.assign(nslabs, 0.0);
+  m.slab_contacts.assign(nslabs, 0);
+
+  Vec3* __restrict f = p_.f.data();
+  Vec3* __restrict t = p_.t.data();
+  const Vec3* x = p_.x.data();
+  const Vec3* v = p_.v.data();
+  const Vec3* w = p_.w.data();
+  const double* radius = p_.radius.data();
+  const double* mass = p_.mass.data();
+  const double* inv_inertia = p_.inv_inertia.data();
+  const int32_t* mat = p_.material.data();
+  const int32_t* start = m.list.start.data();
+  const int32_t* partner = m.list.partner.data();
+  Vec3* shear = m.shear.data();
+  const PairConstants* pc = m.pair.data();
+
+#pragma omp parallel num_threads(num_threads_)
+  {
+#pragma omp for schedule(static)
+    for (size_t i = 0; i < n; ++i) {
+      f[i] = mass[i] * g;
+      t[i] = Vec3{};
+    }
+    // Particle pairs: even slabs, then odd slabs (see neighbor.h for why this is race-free and
+    // deterministic).
+    for (int phase = 0; phase < 2; ++phase) {
+#pragma omp for schedule(dynamic, 1)
+      for (int s = phase; s < nslabs; s += 2) {
+        double worst = 0;
+        int64_t touching = 0;
+        for (int32_t i = m.list.slab_start[s]; i < m.list.slab_start[s + 1]; ++i) {
+          const Vec3 xi = x[i], vi = v[i], wi = w[i];
+          const double ri = radius[i], mi = mass[i], inv_ii = inv_inertia[i];
+          const PairConstants* pci = pc + mat[i] * nm;
+          Vec3 fi, ti;
+          for (int32_t k = start[i]; k < start[i + 1]; ++k) {
+            const int32_t j = partner[k];
+            const Vec3 d = x[j] - xi;
+            const double rj = radius[j];
+            const double rsum = ri + rj;
+            const double d2 = Norm2(d);
+            if (d2 >= rsum * rsum) {
+              shear[k] = Vec3{};
+              continue;
+            }
+            const double dist = std::sqrt(d2);
+            const double delta = rsum - dist;
+            const Vec3 nrm = (1.0 / dist) * d;
+            const double mj = mass[j];
+            const double r_star = ri * rj / rsum;
+            const double m_star = mi * mj / (mi + mj);
+            const Vec3 v_rel = (v[j] - vi) - rj * Cross(w[j], nrm) - ri * Cross(wi, nrm);
+            const ContactForce cf =
+                EvaluateContact(pci[mat[j]], nrm, delta, r_star, m_star, v_rel, wi - w[j],
+                                inv_ii + inv_inertia[j], dt, shear[k]);
+            const Vec3 fa = cf.ft - cf.fn * nrm;  // force on i
+            const Vec3 nxf = Cross(nrm, cf.ft);
+            fi += fa;
+            ti += ri * nxf + cf.mr;
+            f[j] -= fa;
+            t[j] += rj * nxf - cf.mr;
+            worst = std::max(worst, delta / (2.0 * std::min(ri, rj)));
+            ++touching;
+          }
+          f[i] += fi;
+          t[i] += ti;
+        }
+        m.slab_overlap[s] = worst;
+        m.slab_contacts[s] = touching;
+      }
+    }
+    // Particle-plane contacts: forces per entry in parallel, summed serially below.
+    const size_t ne = m.wall_i.size();
+    const int np = static_cast<int>(config_.planes.size());
+#pragma omp for schedule(static)
+    for (size_t e = 0; e < ne; ++e) {
+      const int32_t i = m.wall_i[e];
+      const Plane& pl = config_.planes[m.wall_k[e]];
+      const double ri = radius[i];
+      const double delta = ri - Dot(x[i] - pl.point, pl.normal);
+      if (delta <= 0.0) {
+        m.wall_shear[e] = Vec3{};
+        m.wall_f[e] = Vec3{};
+        m.wall_t[e] = Vec3{};
+        continue;
+      }
+      const Vec3 nrm = -pl.normal;  // from the particle to the wall
+      const Vec3 v_rel = -(v[i] + ri * Cross(w[i], nrm));
+      const ContactForce cf =
+          EvaluateContact(m.wall[mat[i] * np + m.wall_k[e]], nrm, delta, ri, mass[i], v_rel,
+                          w[i], inv_inertia[i], dt, m.wall_shear[e]);
+      m.wall_f[e] = cf.ft - cf.fn * nrm;
+      m.wall_t[e] = ri * Cross(nrm, cf.ft) + cf.mr;
+    }
+  }
+  std::fill(plane_force_.begin(), plane_force_.end(), Vec3{});
+  m.wall_contacts = 0;
+  double worst = 0;
+  for (size_t e = 0; e < m.wall_i.size(); ++e) {
+    const int32_t i = m.wall_i[e];
+    if (Norm2(m.wall_f[e]) == 0.0 && Norm2(m.wall_t[e]) == 0.0) continue;
+    f[i] += m.wall_f[e];
+    t[i] += m.wall_t[e];
+    plane_force_[m.wall_k[e]] -= m.wall_f[e];
+    ++m.wall_contacts;
+    const Plane& pl = config_.planes[m.wall_k[e]];
+    worst = std::max(worst, (radius[i] - Dot(x[i] - pl.point, pl.normal)) / (2.0 * radius[i]));
+  }
+  m.contacts = 0;
+  for (int s = 0; s < nslabs; ++s) {
+    m.contacts += m.slab_contacts[s];
+    worst = std::max(worst, m.slab_overlap[s]);
+  }
+  m.max_overlap = worst;
+}
+
+StepStatus System::Step() {
+  Impl& m = *impl_;
+  const size_t n = p_.size();
+  const double dt = config_.time_step;
+  const double h = 0.5 * dt;
+  Vec3* x = p_.x.data();
+  Vec3* v = p_.v.data();
+  Vec3* w = p_.w.data();
+  const Vec3* f = p_.f.data();
+  const Vec3* t = p_.t.data();
+  const double* inv_mass = p_.inv_mass.data();
+  const double* inv_inertia = p_.inv_inertia.data();
+
+  // Velocity Verlet (LIGGGHTS fix nve/sphere; Allen & Tildesley eq. 3.19): half kick, drift.
+  double max_disp2 = 0;
+  const Vec3* xb = m.x_build.data();
+  const bool have_build = m.list_valid && m.x_build.size() == n;
+#pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : max_disp2)
+  for (size_t i = 0; i < n; ++i) {
+    v[i] += (h * inv_mass[i]) * f[i];
+    w[i] += (h * inv_inertia[i]) * t[i];
+    x[i] += dt * v[i];
+    if (have_build) max_disp2 = std::max(max_disp2, Norm2(x[i] - xb[i]));
+  }
+  const double half_skin = 0.5 * m.skin;
+  if (m.needs_rebuild || !have_build || max_disp2 > half_skin * half_skin) Rebuild();
+
+  ComputeForces();
+
+  // Second half kick, with health checks.
+  v = p_.v.data();
+  w = p_.w.data();
+  f = p_.f.data();
+  t = p_.t.data();
+  inv_mass = p_.inv_mass.data();
+  inv_inertia = p_.inv_inertia.data();
+  double max_v2 = 0;
+  int bad = 0;
+#pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : max_v2) \
+    reduction(| : bad)
+  for (size_t i = 0; i < n; ++i) {
+    v[i] += (h * inv_mass[i]) * f[i];
+    w[i] += (h * inv_inertia[i]) * t[i];
+    const double v2 = Norm2(v[i]);
+    if (!(std::isfinite(v2) && IsFinite(p_.x[i]) && IsFinite(w[i]))) bad = 1;
+    max_v2 = std::max(max_v2, v2);
+  }
+  time_ += dt;
+  ++step_count_;
+
+  StepStatus status;
+  if (bad) status.flags |= kNonFinite;
+  if (max_v2 > config_.max_speed * config_.max_speed) status.flags |= kRunawaySpeed;
+  if (m.max_overlap > config_.max_overlap_fraction) status.flags |= kExcessiveOverlap;
+  if (!status.ok()) Diagnose(&status);
+  return status;
+}
+
+void System::Diagnose(StepStatus* status) const {
+  // Rare path: find the offending particle with the smallest persistent id and say what to do.
+  status->time = time_;
+  std::ostringstream msg;
+  msg.precision(6);
+  const size_t n = p_.size();
+  auto first = [&](auto pred) {
+    int64_t best = -1;
+    size_t at = 0;
+    for (size_t i = 0; i < n; ++i)
+      if (pred(i) && (best < 0 || p_.id[i] < best)) {
+        best = p_.id[i];
+        at = i;
+      }
+    return std::make_pair(best, at);
+  };
+  if (status->flags & kNonFinite) {
+    auto [id, i] = first([&](size_t i) {
+      return !(IsFinite(p_.x[i]) && IsFinite(p_.v[i]) && IsFinite(p_.w[i]));
+    });
+    status->particle = id;
+    msg << "particle " << id << " has a non-finite position or velocity at t = " << time_
+        << " s; lower time_step.rayleigh_fraction";
+    (void)i;
+  } else if (status->flags & kRunawaySpeed) {
+    const double vmax2 = config_.max_speed * config_.max_speed;
+    auto [id, i] = first([&](size_t i) { return Norm2(p_.v[i]) > vmax2; });
+    status->particle = id;
+    msg << "particle " << id << " moves at " << Norm(p_.v[i]) << " m/s at t = " << time_
+        << " s, above the runaway limit " << config_.max_speed
+        << " m/s; lower time_step.rayleigh_fraction or check restitution <= 1";
+  } else {
+    // Excessive overlap: find the deepest particle-particle or particle-wall overlap.
+    const Impl& m = *impl_;
+    double worst = 0;
+    int64_t id = -1;
+    for (size_t i = 0; i + 1 < m.list.start.size(); ++i)
+      for (int32_t k = m.list.start[i]; k < m.list.start[i + 1]; ++k) {
+        const int32_t j = m.list.partner[k];
+        const double ov = (p_.radius[i] + p_.radius[j] - Norm(p_.x[j] - p_.x[i])) /
+                          (2.0 * std::min(p_.radius[i], p_.radius[j]));
+        if (ov > worst) {
+          worst = ov;
+          id = std::min(p_.id[i], p_.id[j]);
+        }
+      }
+    for (size_t e = 0; e < m.wall_i.size(); ++e) {
+      const int32_t i = m.wall_i[e];
+      const Plane& pl = config_.planes[m.wall_k[e]];
+      const double ov = (p_.radius[i] - Dot(p_.x[i] - pl.point, pl.normal)) / (2 * p_.radius[i]);
+      if (ov > worst) {
+        worst = ov;
+        id = p_.id[i];
+      }
+    }
+    status->particle = id;
+    msg << "particle " << id << " overlaps by " << 100.0 * worst << "% of its diameter at t = "
+        << time_ << " s (limit " << 100.0 * config_.max_overlap_fraction
+        << "%); lower time_step.rayleigh_fraction or raise the shear modulus";
+  }
+  status->message = msg.str();
+}
+
+// Sums over particles in persistent-id order, so they do not depend on storage order.
+template <typename F>
+static void ForEachById(const Particles& p, int64_t next_id, F fn) {
+  std::vector<int32_t> index(next_id, -1);
+  for (size_t i = 0; i < p.size(); ++i) index[p.id[i]] = static_cast<int32_t>(i);
+  for (int64_t id = 0; id < next_id; ++id)
+    if (index[id] >= 0) fn(static_cast<size_t>(index[id]));
+}
+
+double System::KineticEnergy() const {
+  double e = 0;
+  ForEachById(p_, next_id_, [&](size_t i) {
+    e += 0.5 * p_.mass[i] * Norm2(p_.v[i]) + 0.5 / p_.inv_inertia[i] * Norm2(p_.w[i]);
+  });
+  return e;
+}
+
+double System::PotentialEnergy() const {
+  double e = 0;
+  ForEachById(p_, next_id_, [&](size_t i) { e -= p_.mass[i] * Dot(config_.gravity, p_.x[i]); });
+  return e;
+}
+
+double System::ElasticEnergy() const {
+  // Hertz normal potential: integral of 4/3 E* sqrt(R*) d^(3/2) = 8/15 E* sqrt(R*) delta^(5/2).
+  const Impl& m = *impl_;
+  const int nm = materials_.size();
+  double e = 0;
+  if (!m.list_valid) return 0;
+  for (size_t i = 0; i + 1 < m.list.start.size(); ++i)
+    for (int32_t k = m.list.start[i]; k < m.list.start[i + 1]; ++k) {
+      const int32_t j = m.list.partner[k];
+      const double rsum = p_.radius[i] + p_.radius[j];
+      const double delta = rsum - Norm(p_.x[j] - p_.x[i]);
+      if (delta <= 0) continue;
+      const double r_star = p_.radius[i] * p_.radius[j] / rsum;
+      const PairConstants& c = m.pair[p_.material[i] * nm + p_.material[j]];
+      e += 0.4 * HertzForce(c.e_star, r_star, delta) * delta;
+    }
+  const int np = static_cast<int>(config_.planes.size());
+  for (size_t e_i = 0; e_i < m.wall_i.size(); ++e_i) {
+    const int32_t i = m.wall_i[e_i];
+    const Plane& pl = config_.planes[m.wall_k[e_i]];
+    const double delta = p_.radius[i] - Dot(p_.x[i] - pl.point, pl.normal);
+    if (delta <= 0) continue;
+    const PairConstants& c = m.wall[p_.material[i] * np + m.wall_k[e_i]];
+    e += 0.4 * HertzForce(c.e_star, p_.radius[i], delta) * delta;
+  }
+  return e;
+}
+
+Vec3 System::Momentum() const {
+  Vec3 pm;
+  ForEachById(p_, next_id_, [&](size_t i) { pm += p_.mass[i] * p_.v[i]; });
+  return pm;
+}
+
+uint64_t System::StateHash() const {
+  // FNV-1a 64 over the bytes of the state, in persistent-id order.
+  uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* data, size_t bytes) {
+    const unsigned char* c = static_cast<const unsigned char*>(data);
+    for (size_t k = 0; k < bytes; ++k) {
+      h ^= c[k];
+      h *= 1099511628211ull;
+    }
+  };
+  ForEachById(p_, next_id_, [&](size_t i) {
+    mix(&p_.id[i], sizeof(int64_t));
+    mix(&p_.x[i], sizeof(Vec3));
+    mix(&p_.v[i], sizeof(Vec3));
+    mix(&p_.w[i], sizeof(Vec3));
+    mix(&p_.radius[i], sizeof(double));
+    mix(&p_.material[i], sizeof(int32_t));
+  });
+  mix(&time_, sizeof(double));
+  return h;
+}
+
+}  // namespace dem

@@ -101,6 +101,9 @@ class System {
   const Particles& particles() const { return p_; }
   Particles& mutable_particles() { return p_; }  // positions/velocities only; call Touch() after
   void Touch();  // forces a neighbour-list rebuild before the next step
+  // Rebuilds now: storage order and neighbour list become a function of positions and ids alone.
+  // Call before saving and after loading a state, so that a restored run replays bit for bit.
+  void Canonicalize() { Rebuild(); }
   double time() const { return time_; }
   void set_time(double t) { time_ = t; }
   int64_t step_count() const { return step_count_; }
@@ -124,6 +127,10 @@ class System {
   int num_threads() const { return num_threads_; }
 
  private:
+  void Rebuild();        // reorder storage by cell, rebuild the lists, carry the history over
+  void ComputeForces();  // gravity + contacts into p_.f, p_.t
+  void Diagnose(StepStatus* status) const;
+
   struct Impl;
   MaterialTable materials_;
   SystemConfig config_;
@@ -132,6 +139,7 @@ class System {
   double time_ = 0;
   int64_t step_count_ = 0;
   int64_t next_id_ = 0;
+  int64_t builds_ = 0;
   int num_threads_ = 1;
   Impl* impl_;
 };

@@ -1,1 +1,384 @@
-// placeholder
+#include "sim/bed_io.h"
+
+#include <hdf5.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "sim/internal_h5.h"
+#include "sim/scene.h"
+
+namespace sim {
+namespace {
+
+using h5::CheckId;
+using h5::CheckOk;
+using h5::Handle;
+
+// The particle datasets of /particles that are hard links to the snapshot's (one copy on disk).
+const char* const kLinkedFields[] = {"id",     "position", "velocity", "angular_velocity",
+                                     "radius", "material"};
+
+void WriteVectors(hid_t group, const char* name, const std::vector<dem::Vec3>& field,
+                  const std::vector<size_t>& order) {
+  std::vector<double> buffer(3 * order.size());
+  for (size_t k = 0; k < order.size(); ++k) {
+    const dem::Vec3& a = field[order[k]];
+    buffer[3 * k + 0] = a.x;
+    buffer[3 * k + 1] = a.y;
+    buffer[3 * k + 2] = a.z;
+  }
+  h5::WriteArray(group, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buffer.data(), order.size(), 3);
+}
+
+void WriteStringList(hid_t location, const std::string& name,
+                     const std::vector<std::string>& strings) {
+  Handle type(CheckId(H5Tcopy(H5T_C_S1), "H5Tcopy"), H5Tclose);
+  CheckOk(H5Tset_size(type.get(), H5T_VARIABLE), "H5Tset_size");
+  CheckOk(H5Tset_cset(type.get(), H5T_CSET_UTF8), "H5Tset_cset");
+  const hsize_t n = strings.size();
+  Handle space(CheckId(H5Screate_simple(1, &n, nullptr), "H5Screate_simple"), H5Sclose);
+  Handle lcpl(CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
+  CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1), "H5Pset_create_intermediate_group");
+  Handle dataset(CheckId(H5Dcreate2(location, name.c_str(), type.get(), space.get(), lcpl.get(),
+                                    H5P_DEFAULT, H5P_DEFAULT),
+                         "H5Dcreate2 " + name),
+                 H5Dclose);
+  std::vector<const char*> pointers;
+  for (const std::string& s : strings) pointers.push_back(s.c_str());
+  if (n > 0) {
+    CheckOk(H5Dwrite(dataset.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, pointers.data()),
+            "H5Dwrite " + name);
+  }
+}
+
+// Writes everything but the sidecar into a new file at `path`.
+h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& system,
+                               const std::string& scene_yaml) {
+  const dem::Particles& p = system.particles();
+  Handle file = h5::CreateFile(path, /*swmr=*/false, nullptr);
+  Handle root(CheckId(H5Gopen2(file.get(), "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);
+  h5::WriteStringAttribute(root.get(), "version", SCOOPSIM_VERSION);
+  h5::WriteStringAttribute(root.get(), "scene_yaml", scene_yaml);
+  h5::WriteDoubleAttribute(root.get(), "time", system.time());
+  h5::WriteStateHash(root.get(), system.StateHash());
+
+  // Particles: the snapshot holds the arrays; /particles links to them and adds force, torque.
+  const h5::SnapshotEntry entry = h5::WriteParticleSnapshot(file.get(), 0, system.time(), p);
+  Handle particles(
+      CheckId(H5Gcreate2(file.get(), "/particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+              "H5Gcreate2 /particles"),
+      H5Gclose);
+  for (const char* field : kLinkedFields) {
+    const std::string target = entry.group + "/" + field;
+    CheckOk(H5Lcreate_hard(file.get(), target.c_str(), particles.get(), field, H5P_DEFAULT,
+                           H5P_DEFAULT),
+            "H5Lcreate_hard " + target);
+  }
+  const std::vector<size_t> order = h5::IdOrder(p);
+  WriteVectors(particles.get(), "force", p.f, order);
+  WriteVectors(particles.get(), "torque", p.t, order);
+
+  std::vector<std::string> names;
+  for (int i = 0; i < system.materials().size(); ++i) names.push_back(system.materials()[i].name);
+  WriteStringList(file.get(), "/materials/names", names);
+
+  // Contact history, already sorted by (a, b).
+  const std::vector<dem::ContactRecord> contacts = system.Contacts();
+  const size_t m = contacts.size();
+  std::vector<int64_t> a(m), b(m);
+  std::vector<double> shear(3 * m);
+  for (size_t k = 0; k < m; ++k) {
+    a[k] = contacts[k].a;
+    b[k] = contacts[k].b;
+    shear[3 * k + 0] = contacts[k].shear.x;
+    shear[3 * k + 1] = contacts[k].shear.y;
+    shear[3 * k + 2] = contacts[k].shear.z;
+  }
+  Handle group(CheckId(H5Gcreate2(file.get(), "/contacts", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                       "H5Gcreate2 /contacts"),
+               H5Gclose);
+  h5::WriteArray(group.get(), "a", H5T_STD_I64LE, H5T_NATIVE_INT64, a.data(), m, 1);
+  h5::WriteArray(group.get(), "b", H5T_STD_I64LE, H5T_NATIVE_INT64, b.data(), m, 1);
+  h5::WriteArray(group.get(), "shear", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, shear.data(), m, 3);
+
+  group.reset();
+  particles.reset();
+  root.reset();
+  CheckOk(file.reset(), "H5Fclose " + path);
+  return entry;
+}
+
+// Reads datasets of a bed file, turning every problem into an InputError naming file and dataset.
+class BedReader {
+ public:
+  BedReader(const std::string& path, hid_t file) : path_(path), file_(file) {}
+
+  [[noreturn]] void Fail(const std::string& dataset, const std::string& message) const {
+    throw InputError(path_ + ": " + dataset + ": " + message);
+  }
+
+  // True if every link along the absolute `name` exists.
+  bool Exists(const std::string& name) const {
+    for (size_t slash = name.find('/', 1);; slash = name.find('/', slash + 1)) {
+      const std::string prefix = name.substr(0, slash);
+      htri_t exists = -1;
+      H5E_BEGIN_TRY { exists = H5Lexists(file_, prefix.c_str(), H5P_DEFAULT); }
+      H5E_END_TRY;
+      if (exists <= 0) return false;
+      if (slash == std::string::npos) return true;
+    }
+  }
+
+  // Reads a numeric dataset of shape (rows) for width 1 or (rows x width). `rows` < 0 accepts any
+  // row count; the count read is returned in *rows_read.
+  template <typename T>
+  std::vector<T> Read(const std::string& name, H5T_class_t type_class, hid_t memory_type,
+                      int64_t rows, hsize_t width, int64_t* rows_read = nullptr) const {
+    Handle dataset = Open(name);
+    Handle space(CheckId(H5Dget_space(dataset.get()), "H5Dget_space " + name), H5Sclose);
+    const int expected_rank = width == 1 ? 1 : 2;
+    hsize_t dims[H5S_MAX_RANK] = {};
+    const int rank = H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+    const std::string want = rows < 0 ? "n" : std::to_string(rows);
+    const std::string expected =
+        "(" + want + (width == 1 ? std::string() : ", " + std::to_string(width)) + ")";
+    if (rank != expected_rank || (width > 1 && dims[1] != width) ||
+        (rows >= 0 && dims[0] != static_cast<hsize_t>(rows))) {
+      std::string got = "(";
+      for (int i = 0; i < rank; ++i) got += (i ? ", " : "") + std::to_string(dims[i]);
+      Fail(name, "expected shape " + expected + ", got " + got + ")");
+    }
+    Handle type(CheckId(H5Dget_type(dataset.get()), "H5Dget_type " + name), H5Tclose);
+    if (H5Tget_class(type.get()) != type_class) {
+      Fail(name, type_class == H5T_FLOAT ? "expected floating-point numbers" : "expected integers");
+    }
+    std::vector<T> values(dims[0] * width);
+    if (!values.empty()) {
+      herr_t status = -1;
+      H5E_BEGIN_TRY {
+        status = H5Dread(dataset.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+      }
+      H5E_END_TRY;
+      if (status < 0) Fail(name, "cannot be read (damaged file?)");
+    }
+    if (rows_read != nullptr) *rows_read = static_cast<int64_t>(dims[0]);
+    return values;
+  }
+
+  std::vector<dem::Vec3> ReadVectors(const std::string& name, int64_t rows) const {
+    const std::vector<double> flat = Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, 3);
+    std::vector<dem::Vec3> out(static_cast<size_t>(rows));
+    for (size_t k = 0; k < out.size(); ++k)
+      out[k] = {flat[3 * k], flat[3 * k + 1], flat[3 * k + 2]};
+    return out;
+  }
+
+  std::vector<std::string> ReadStrings(const std::string& name) const {
+    Handle dataset = Open(name);
+    Handle space(CheckId(H5Dget_space(dataset.get()), "H5Dget_space " + name), H5Sclose);
+    hsize_t dims[H5S_MAX_RANK] = {};
+    if (H5Sget_simple_extent_dims(space.get(), dims, nullptr) != 1) {
+      Fail(name, "expected a 1-D list of strings");
+    }
+    Handle type(CheckId(H5Dget_type(dataset.get()), "H5Dget_type " + name), H5Tclose);
+    if (H5Tget_class(type.get()) != H5T_STRING) Fail(name, "expected strings");
+    const size_t n = dims[0];
+    std::vector<std::string> out;
+    if (n == 0) return out;
+    Handle memory_type(CheckId(H5Tcopy(type.get()), "H5Tcopy"), H5Tclose);
+    herr_t status = -1;
+    if (H5Tis_variable_str(type.get()) > 0) {
+      std::vector<char*> pointers(n, nullptr);
+      H5E_BEGIN_TRY {
+        status = H5Dread(dataset.get(), memory_type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT,
+                         pointers.data());
+      }
+      H5E_END_TRY;
+      if (status < 0) Fail(name, "cannot be read (damaged file?)");
+      for (char* s : pointers) out.emplace_back(s != nullptr ? s : "");
+      H5Dvlen_reclaim(memory_type.get(), space.get(), H5P_DEFAULT, pointers.data());
+    } else {
+      const size_t size = H5Tget_size(type.get());
+      std::vector<char> buffer(n * size);
+      H5E_BEGIN_TRY {
+        status =
+            H5Dread(dataset.get(), memory_type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data());
+      }
+      H5E_END_TRY;
+      if (status < 0) Fail(name, "cannot be read (damaged file?)");
+      for (size_t k = 0; k < n; ++k) {
+        const std::string s(buffer.data() + k * size, size);
+        out.push_back(s.substr(0, s.find('\0')));
+      }
+    }
+    return out;
+  }
+
+  double ReadRootDouble(const std::string& name) const {
+    htri_t exists = -1;
+    H5E_BEGIN_TRY { exists = H5Aexists_by_name(file_, "/", name.c_str(), H5P_DEFAULT); }
+    H5E_END_TRY;
+    if (exists <= 0) Fail("attribute " + name, "missing");
+    Handle attribute(CheckId(H5Aopen_by_name(file_, "/", name.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+                             "H5Aopen " + name),
+                     H5Aclose);
+    Handle type(CheckId(H5Aget_type(attribute.get()), "H5Aget_type " + name), H5Tclose);
+    if (H5Tget_class(type.get()) != H5T_FLOAT) Fail("attribute " + name, "expected a number");
+    double value = 0;
+    CheckOk(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, &value), "H5Aread " + name);
+    return value;
+  }
+
+ private:
+  Handle Open(const std::string& name) const {
+    if (!Exists(name)) Fail(name, "missing");
+    hid_t dataset = H5I_INVALID_HID;
+    H5E_BEGIN_TRY { dataset = H5Dopen2(file_, name.c_str(), H5P_DEFAULT); }
+    H5E_END_TRY;
+    if (dataset < 0) Fail(name, "not a dataset");
+    return Handle(dataset, H5Dclose);
+  }
+
+  std::string path_;
+  hid_t file_;
+};
+
+}  // namespace
+
+void SaveBed(const std::string& path, const dem::System& system, const std::string& scene_yaml) {
+  namespace fs = std::filesystem;
+  const std::string temporary = path + ".partial";
+  h5::SnapshotEntry entry;
+  try {
+    entry = WriteBedFile(temporary, system, scene_yaml);
+    fs::rename(temporary, path);
+  } catch (const InputError& e) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    throw InputError(path + ": cannot save the bed: " + e.what());
+  } catch (const fs::filesystem_error& e) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    throw InputError(path + ": cannot save the bed: " + e.code().message());
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    throw;
+  }
+  h5::WriteXdmf(path, {entry});
+}
+
+void LoadBed(const std::string& path, dem::System* system) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw InputError(path + ": bed file not found");
+  hid_t file_id = H5I_INVALID_HID;
+  H5E_BEGIN_TRY { file_id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT); }
+  H5E_END_TRY;
+  if (file_id < 0) throw InputError(path + ": not a readable HDF5 file");
+  Handle file(file_id, H5Fclose);
+  const BedReader in(path, file.get());
+
+  // Read and check everything before touching the system.
+  int64_t n = 0;
+  const std::vector<int64_t> ids =
+      in.Read<int64_t>("/particles/id", H5T_INTEGER, H5T_NATIVE_INT64, -1, 1, &n);
+  const std::vector<dem::Vec3> x = in.ReadVectors("/particles/position", n);
+  const std::vector<dem::Vec3> v = in.ReadVectors("/particles/velocity", n);
+  const std::vector<dem::Vec3> w = in.ReadVectors("/particles/angular_velocity", n);
+  const std::vector<dem::Vec3> force = in.ReadVectors("/particles/force", n);
+  const std::vector<dem::Vec3> torque = in.ReadVectors("/particles/torque", n);
+  const std::vector<double> radius =
+      in.Read<double>("/particles/radius", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
+  const std::vector<int32_t> material =
+      in.Read<int32_t>("/particles/material", H5T_INTEGER, H5T_NATIVE_INT32, n, 1);
+  const std::vector<std::string> names = in.ReadStrings("/materials/names");
+  int64_t m = 0;
+  const std::vector<int64_t> a =
+      in.Read<int64_t>("/contacts/a", H5T_INTEGER, H5T_NATIVE_INT64, -1, 1, &m);
+  const std::vector<int64_t> b =
+      in.Read<int64_t>("/contacts/b", H5T_INTEGER, H5T_NATIVE_INT64, m, 1);
+  const std::vector<dem::Vec3> shear = in.ReadVectors("/contacts/shear", m);
+  const double time = in.ReadRootDouble("time");
+
+  for (int64_t k = 1; k < n; ++k) {
+    if (ids[k] <= ids[k - 1]) in.Fail("/particles/id", "ids must be unique and ascending");
+  }
+  for (int64_t k = 0; k < n; ++k) {
+    if (!(radius[k] > 0 && std::isfinite(radius[k]))) {
+      in.Fail("/particles/radius", "particle " + std::to_string(ids[k]) +
+                                       ": expected a radius > 0, got " + std::to_string(radius[k]));
+    }
+  }
+  // File material index -> system material index, by name; only materials in use must exist.
+  std::vector<int> material_of(names.size(), -2);  // -2: not looked up yet
+  for (int64_t k = 0; k < n; ++k) {
+    const int32_t i = material[k];
+    if (i < 0 || static_cast<size_t>(i) >= names.size()) {
+      in.Fail("/particles/material", "particle " + std::to_string(ids[k]) + ": material index " +
+                                         std::to_string(i) + " not in /materials/names (" +
+                                         std::to_string(names.size()) + " names)");
+    }
+    if (material_of[i] == -2) material_of[i] = system->materials().Find(names[i]);
+    if (material_of[i] < 0) {
+      in.Fail("/materials/names",
+              "material '" + names[i] + "' of the bed is not among the scene's materials");
+    }
+  }
+  // Saved id -> position in the file's (sorted) particle list, -1 if absent.
+  auto slot_of = [&ids](int64_t id) -> int64_t {
+    const auto it = std::lower_bound(ids.begin(), ids.end(), id);
+    return it != ids.end() && *it == id ? it - ids.begin() : -1;
+  };
+  const int64_t num_planes = static_cast<int64_t>(system->config().planes.size());
+  for (int64_t k = 0; k < m; ++k) {
+    if (slot_of(a[k]) < 0) {
+      in.Fail("/contacts/a", "contact " + std::to_string(k) + ": particle " + std::to_string(a[k]) +
+                                 " is not in the bed");
+    }
+    if (b[k] >= 0 && slot_of(b[k]) < 0) {
+      in.Fail("/contacts/b", "contact " + std::to_string(k) + ": particle " + std::to_string(b[k]) +
+                                 " is not in the bed");
+    }
+    if (b[k] < 0 && -1 - b[k] >= num_planes) {
+      in.Fail("/contacts/b", "contact " + std::to_string(k) + " touches plane " +
+                                 std::to_string(-1 - b[k]) + ", but the scene has " +
+                                 std::to_string(num_planes) + " planes");
+    }
+  }
+
+  // Particles, in saved id order: a bed loaded into an empty System keeps its ids.
+  system->Reserve(system->particles().size() + static_cast<size_t>(n));
+  std::vector<int64_t> new_id(static_cast<size_t>(n));
+  std::unordered_map<int64_t, size_t> slot_of_new_id;
+  for (int64_t k = 0; k < n; ++k) {
+    new_id[k] = system->AddParticle(x[k], v[k], w[k], radius[k], material_of[material[k]]);
+    slot_of_new_id.emplace(new_id[k], static_cast<size_t>(k));
+  }
+  // The last step's force and torque: velocity Verlet's first half kick uses them, so a restored
+  // bed replays bit for bit.
+  dem::Particles& p = system->mutable_particles();
+  for (size_t i = 0; i < p.size(); ++i) {
+    const auto it = slot_of_new_id.find(p.id[i]);
+    if (it == slot_of_new_id.end()) continue;
+    p.f[i] = force[it->second];
+    p.t[i] = torque[it->second];
+  }
+  system->Touch();
+
+  // Contact history, added to what the system already has.
+  std::vector<dem::ContactRecord> records = system->Contacts();
+  for (int64_t k = 0; k < m; ++k) {
+    const int64_t new_b = b[k] >= 0 ? new_id[slot_of(b[k])] : b[k];
+    records.push_back({new_id[slot_of(a[k])], new_b, shear[k]});
+  }
+  system->SetContacts(records);
+  system->set_time(time);
+}
+
+}  // namespace sim

@@ -1,1 +1,577 @@
-// placeholder
+#include "sim/h5_output.h"
+
+#include <hdf5.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "sim/internal_h5.h"
+#include "sim/scene.h"
+
+namespace sim {
+namespace h5 {
+
+// ---------------------------------------------------------------------------------------------
+// Shared helpers (declared in sim/internal_h5.h).
+
+hid_t CheckId(hid_t id, const std::string& what) {
+  if (id < 0) throw std::runtime_error("HDF5: " + what + " failed");
+  return id;
+}
+
+void CheckOk(herr_t status, const std::string& what) {
+  if (status < 0) throw std::runtime_error("HDF5: " + what + " failed");
+}
+
+Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
+  namespace fs = std::filesystem;
+  if (got_swmr != nullptr) *got_swmr = false;
+  const fs::path parent = fs::path(path).parent_path();
+  if (!parent.empty()) {
+    std::error_code ec;
+    fs::create_directories(parent, ec);
+    if (ec) {
+      throw InputError(path + ": cannot create the folder " + parent.string() + ": " +
+                       ec.message());
+    }
+  }
+  // Strong close: H5Fclose really closes the file, so "closed" means "complete on disk".
+  Handle fapl(CheckId(H5Pcreate(H5P_FILE_ACCESS), "H5Pcreate"), H5Pclose);
+  CheckOk(H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG), "H5Pset_fclose_degree");
+  hid_t file = H5I_INVALID_HID;
+  if (swmr) {
+    // SWMR needs the 1.10 file format. If the file system refuses (no file locking), fall back
+    // to the same format without SWMR.
+    CheckOk(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_LATEST, H5F_LIBVER_LATEST),
+            "H5Pset_libver_bounds");
+    H5E_BEGIN_TRY {
+      file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC | H5F_ACC_SWMR_WRITE, H5P_DEFAULT, fapl.get());
+    }
+    H5E_END_TRY;
+    if (file >= 0 && got_swmr != nullptr) *got_swmr = true;
+  }
+  if (file < 0) {
+    H5E_BEGIN_TRY { file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()); }
+    H5E_END_TRY;
+  }
+  if (file < 0) {
+    // HDF5 does not say why; ask the C library for the reason.
+    std::string reason = "HDF5 could not create it";
+    errno = 0;
+    if (std::FILE* probe = std::fopen(path.c_str(), "wb")) {
+      std::fclose(probe);
+    } else if (errno != 0) {
+      reason = std::strerror(errno);
+    }
+    throw InputError(path + ": cannot create the output file: " + reason);
+  }
+  return Handle(file, H5Fclose);
+}
+
+namespace {
+
+// Replaces attribute `name` of `object` with a scalar of `file_type` read from `value`.
+void ReplaceScalarAttribute(hid_t object, const std::string& name, hid_t file_type,
+                            hid_t memory_type, const void* value) {
+  const htri_t exists = H5Aexists(object, name.c_str());
+  CheckOk(exists, "H5Aexists " + name);
+  if (exists > 0) CheckOk(H5Adelete(object, name.c_str()), "H5Adelete " + name);
+  Handle space(CheckId(H5Screate(H5S_SCALAR), "H5Screate"), H5Sclose);
+  Handle attribute(
+      CheckId(H5Acreate2(object, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT),
+              "H5Acreate2 " + name),
+      H5Aclose);
+  CheckOk(H5Awrite(attribute.get(), memory_type, value), "H5Awrite " + name);
+}
+
+Handle VariableStringType() {
+  Handle type(CheckId(H5Tcopy(H5T_C_S1), "H5Tcopy"), H5Tclose);
+  CheckOk(H5Tset_size(type.get(), H5T_VARIABLE), "H5Tset_size");
+  CheckOk(H5Tset_cset(type.get(), H5T_CSET_UTF8), "H5Tset_cset");
+  return type;
+}
+
+// Link-creation properties that create missing intermediate groups ("/series/scoop/force").
+Handle IntermediateGroupsLcpl() {
+  Handle lcpl(CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
+  CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1), "H5Pset_create_intermediate_group");
+  return lcpl;
+}
+
+std::string FormatDouble(double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
+}
+
+std::string XmlEscape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+void WriteStringAttribute(hid_t object, const std::string& name, const std::string& value) {
+  Handle type = VariableStringType();
+  const char* data = value.c_str();
+  ReplaceScalarAttribute(object, name, type.get(), type.get(), &data);
+}
+
+void WriteDoubleAttribute(hid_t object, const std::string& name, double value) {
+  ReplaceScalarAttribute(object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &value);
+}
+
+void WriteU64Attribute(hid_t object, const std::string& name, uint64_t value) {
+  ReplaceScalarAttribute(object, name, H5T_STD_U64LE, H5T_NATIVE_UINT64, &value);
+}
+
+std::string HexHash(uint64_t hash) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(hash));
+  return text;
+}
+
+void WriteStateHash(hid_t object, uint64_t hash) {
+  WriteStringAttribute(object, "state_hash", HexHash(hash));
+  WriteU64Attribute(object, "state_hash_u64", hash);
+}
+
+std::string ReadStringAttribute(hid_t object, const std::string& name) {
+  Handle attribute(CheckId(H5Aopen(object, name.c_str(), H5P_DEFAULT), "H5Aopen " + name),
+                   H5Aclose);
+  Handle file_type(CheckId(H5Aget_type(attribute.get()), "H5Aget_type " + name), H5Tclose);
+  if (H5Tget_class(file_type.get()) != H5T_STRING) {
+    throw std::runtime_error("HDF5: attribute " + name + " is not a string");
+  }
+  Handle memory_type(CheckId(H5Tcopy(file_type.get()), "H5Tcopy"), H5Tclose);
+  if (H5Tis_variable_str(file_type.get()) > 0) {
+    char* data = nullptr;
+    CheckOk(H5Aread(attribute.get(), memory_type.get(), &data), "H5Aread " + name);
+    std::string value = data != nullptr ? data : "";
+    H5free_memory(data);
+    return value;
+  }
+  std::string value(H5Tget_size(file_type.get()), '\0');
+  CheckOk(H5Aread(attribute.get(), memory_type.get(), value.data()), "H5Aread " + name);
+  return value.substr(0, value.find('\0'));
+}
+
+void WriteArray(hid_t location, const std::string& name, hid_t file_type, hid_t memory_type,
+                const void* data, hsize_t rows, hsize_t width) {
+  const int rank = width == 1 ? 1 : 2;
+  const hsize_t dims[2] = {rows, width};
+  Handle space(CheckId(H5Screate_simple(rank, dims, nullptr), "H5Screate_simple"), H5Sclose);
+  Handle dcpl(CheckId(H5Pcreate(H5P_DATASET_CREATE), "H5Pcreate"), H5Pclose);
+  if (rows > 0) {
+    const hsize_t chunk[2] = {std::min(rows, kSnapshotChunkRows), width};
+    CheckOk(H5Pset_chunk(dcpl.get(), rank, chunk), "H5Pset_chunk");
+    CheckOk(H5Pset_shuffle(dcpl.get()), "H5Pset_shuffle");
+    CheckOk(H5Pset_deflate(dcpl.get(), 4), "H5Pset_deflate");
+  }
+  Handle dataset(CheckId(H5Dcreate2(location, name.c_str(), file_type, space.get(), H5P_DEFAULT,
+                                    dcpl.get(), H5P_DEFAULT),
+                         "H5Dcreate2 " + name),
+                 H5Dclose);
+  if (rows > 0) {
+    CheckOk(H5Dwrite(dataset.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data),
+            "H5Dwrite " + name);
+  }
+}
+
+std::vector<size_t> IdOrder(const dem::Particles& particles) {
+  const std::vector<int64_t>& id = particles.id;
+  std::vector<size_t> order(id.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  if (!std::is_sorted(id.begin(), id.end())) {
+    std::sort(order.begin(), order.end(), [&id](size_t a, size_t b) { return id[a] < id[b]; });
+  }
+  return order;
+}
+
+std::string SnapshotGroupName(int64_t index) {
+  char name[32];
+  std::snprintf(name, sizeof name, "/snapshots/%06lld", static_cast<long long>(index));
+  return name;
+}
+
+SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
+                                    const dem::Particles& p) {
+  const size_t n = p.size();
+  if (p.x.size() != n || p.v.size() != n || p.w.size() != n || p.radius.size() != n ||
+      p.material.size() != n) {
+    throw std::invalid_argument("WriteParticleSnapshot: particle arrays differ in length");
+  }
+  SnapshotEntry entry{SnapshotGroupName(index), time, static_cast<int64_t>(n)};
+  Handle lcpl = IntermediateGroupsLcpl();
+  Handle group(CheckId(H5Gcreate2(file, entry.group.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+                       "H5Gcreate2 " + entry.group),
+               H5Gclose);
+  WriteDoubleAttribute(group.get(), "time", time);
+
+  // Gather every field in persistent-id order into one scratch buffer, then write it.
+  const std::vector<size_t> order = IdOrder(p);
+  std::vector<int64_t> ints(n);
+  for (size_t k = 0; k < n; ++k) ints[k] = p.id[order[k]];
+  WriteArray(group.get(), "id", H5T_STD_I64LE, H5T_NATIVE_INT64, ints.data(), n, 1);
+  for (size_t k = 0; k < n; ++k) ints[k] = static_cast<int64_t>(k);
+  WriteArray(group.get(), "connectivity", H5T_STD_I64LE, H5T_NATIVE_INT64, ints.data(), n, 1);
+
+  std::vector<double> buffer(3 * n);
+  auto write_vectors = [&](const char* name, const std::vector<dem::Vec3>& field) {
+    for (size_t k = 0; k < n; ++k) {
+      const dem::Vec3& a = field[order[k]];
+      buffer[3 * k + 0] = a.x;
+      buffer[3 * k + 1] = a.y;
+      buffer[3 * k + 2] = a.z;
+    }
+    WriteArray(group.get(), name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buffer.data(), n, 3);
+  };
+  write_vectors("position", p.x);
+  write_vectors("velocity", p.v);
+  write_vectors("angular_velocity", p.w);
+
+  for (size_t k = 0; k < n; ++k) buffer[k] = p.radius[order[k]];
+  WriteArray(group.get(), "radius", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buffer.data(), n, 1);
+  for (size_t k = 0; k < n; ++k) buffer[k] = dem::Norm(p.v[order[k]]);
+  WriteArray(group.get(), "speed", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buffer.data(), n, 1);
+
+  std::vector<int32_t> material(n);
+  for (size_t k = 0; k < n; ++k) material[k] = p.material[order[k]];
+  WriteArray(group.get(), "material", H5T_STD_I32LE, H5T_NATIVE_INT32, material.data(), n, 1);
+  return entry;
+}
+
+std::string XdmfPath(const std::string& h5_path) {
+  return std::filesystem::path(h5_path).replace_extension(".xdmf").string();
+}
+
+void WriteXdmf(const std::string& h5_path, const std::vector<SnapshotEntry>& snapshots) {
+  // Data paths are relative to the sidecar's folder, which is the HDF5 file's folder.
+  const std::string file = XmlEscape(std::filesystem::path(h5_path).filename().string());
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" ?>\n"
+    << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+    << "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
+    << "  <Domain>\n"
+    << "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  for (const SnapshotEntry& s : snapshots) {
+    const std::string n = std::to_string(s.count);
+    auto item = [&](const std::string& dims, const char* number_type, int precision,
+                    const char* dataset) {
+      std::ostringstream d;
+      d << "<DataItem Dimensions=\"" << dims << "\" NumberType=\"" << number_type
+        << "\" Precision=\"" << precision << "\" Format=\"HDF\">" << file << ":" << s.group << "/"
+        << dataset << "</DataItem>";
+      return d.str();
+    };
+    auto attribute = [&](const char* name, const char* type, const std::string& dims,
+                         const char* number_type, int precision) {
+      x << "        <Attribute Name=\"" << name << "\" AttributeType=\"" << type
+        << "\" Center=\"Node\">\n"
+        << "          " << item(dims, number_type, precision, name) << "\n"
+        << "        </Attribute>\n";
+    };
+    x << "      <Grid Name=\"" << s.group.substr(s.group.rfind('/') + 1)
+      << "\" GridType=\"Uniform\">\n"
+      << "        <Time Value=\"" << FormatDouble(s.time) << "\"/>\n"
+      << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n
+      << "\" NodesPerElement=\"1\">\n"
+      << "          " << item(n, "Int", 8, "connectivity") << "\n"
+      << "        </Topology>\n"
+      << "        <Geometry GeometryType=\"XYZ\">\n"
+      << "          " << item(n + " 3", "Float", 8, "position") << "\n"
+      << "        </Geometry>\n";
+    attribute("radius", "Scalar", n, "Float", 8);
+    attribute("speed", "Scalar", n, "Float", 8);
+    attribute("id", "Scalar", n, "Int", 8);
+    attribute("material", "Scalar", n, "Int", 4);
+    attribute("velocity", "Vector", n + " 3", "Float", 8);
+    attribute("angular_velocity", "Vector", n + " 3", "Float", 8);
+    x << "      </Grid>\n";
+  }
+  x << "    </Grid>\n"
+    << "  </Domain>\n"
+    << "</Xdmf>\n";
+
+  const std::string path = XdmfPath(h5_path);
+  const std::string temporary = path + ".tmp";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << x.str();
+    out.close();
+    if (!out) throw std::runtime_error(temporary + ": cannot write the XDMF sidecar");
+  }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+    throw std::runtime_error(path + ": cannot replace the XDMF sidecar: " + std::strerror(errno));
+  }
+}
+
+}  // namespace h5
+
+// ---------------------------------------------------------------------------------------------
+// H5Output
+
+namespace {
+
+constexpr hsize_t kSeriesChunkRows = 1024;  // rows per chunk of a time series
+
+// One appendable time series and its rows not yet written.
+struct Series {
+  h5::Handle dataset;
+  int width = 0;
+  hsize_t rows_on_disk = 0;
+  std::vector<double> pending;  // buffered rows, row-major (pending rows x width)
+};
+
+}  // namespace
+
+struct H5Output::Impl {
+  std::string path;
+  h5::Handle file;
+  h5::Handle root;  // the root group, home of the attributes
+  bool swmr = false;
+  double flush_seconds = 10.0;
+  std::chrono::steady_clock::time_point last_flush;
+  std::map<std::string, Series, std::less<>> series;  // by absolute dataset path
+  std::vector<h5::SnapshotEntry> snapshots;
+
+  void RequireOpen(const char* what) const {
+    if (!file.valid()) throw std::logic_error(std::string("H5Output::") + what + ": file closed");
+  }
+
+  Series& GetSeries(const std::string& name, int width) {
+    auto it = series.find(name);
+    if (it != series.end()) {
+      if (it->second.width != width) {
+        throw std::invalid_argument("H5Output::AppendRow: " + name + " has width " +
+                                    std::to_string(it->second.width) + ", got " +
+                                    std::to_string(width));
+      }
+      return it->second;
+    }
+    // Extendable (n) or (n x width), 1024-row chunks, shuffle + deflate 4. The chunk at the end
+    // stays unfiltered until full: see the crash-safety note in h5_output.h.
+    const int rank = width == 1 ? 1 : 2;
+    const hsize_t w = static_cast<hsize_t>(width);
+    const hsize_t dims[2] = {0, w};
+    const hsize_t max_dims[2] = {H5S_UNLIMITED, w};
+    const hsize_t chunk[2] = {kSeriesChunkRows, w};
+    h5::Handle space(h5::CheckId(H5Screate_simple(rank, dims, max_dims), "H5Screate_simple"),
+                     H5Sclose);
+    h5::Handle dcpl(h5::CheckId(H5Pcreate(H5P_DATASET_CREATE), "H5Pcreate"), H5Pclose);
+    h5::CheckOk(H5Pset_chunk(dcpl.get(), rank, chunk), "H5Pset_chunk");
+    h5::CheckOk(H5Pset_shuffle(dcpl.get()), "H5Pset_shuffle");
+    h5::CheckOk(H5Pset_deflate(dcpl.get(), 4), "H5Pset_deflate");
+    h5::CheckOk(H5Pset_chunk_opts(dcpl.get(), H5D_CHUNK_DONT_FILTER_PARTIAL_CHUNKS),
+                "H5Pset_chunk_opts");
+    h5::Handle lcpl(h5::CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
+    h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1),
+                "H5Pset_create_intermediate_group");
+    Series s;
+    s.dataset = h5::Handle(h5::CheckId(H5Dcreate2(file.get(), name.c_str(), H5T_IEEE_F64LE,
+                                                  space.get(), lcpl.get(), dcpl.get(), H5P_DEFAULT),
+                                       "H5Dcreate2 " + name + " in " + path),
+                           H5Dclose);
+    s.width = width;
+    s.pending.reserve(kSeriesChunkRows * w);
+    return series.emplace(name, std::move(s)).first->second;
+  }
+
+  // Appends the buffered rows of `s` to its dataset.
+  void WriteRows(const std::string& name, Series& s) {
+    const hsize_t w = static_cast<hsize_t>(s.width);
+    const hsize_t n = s.pending.size() / w;
+    if (n == 0) return;
+    const int rank = s.width == 1 ? 1 : 2;
+    const hsize_t new_dims[2] = {s.rows_on_disk + n, w};
+    const std::string what = " " + name + " in " + path;
+    h5::CheckOk(H5Dset_extent(s.dataset.get(), new_dims), "H5Dset_extent" + what);
+    h5::Handle file_space(h5::CheckId(H5Dget_space(s.dataset.get()), "H5Dget_space" + what),
+                          H5Sclose);
+    const hsize_t start[2] = {s.rows_on_disk, 0};
+    const hsize_t count[2] = {n, w};
+    h5::CheckOk(
+        H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr),
+        "H5Sselect_hyperslab" + what);
+    h5::Handle memory_space(h5::CheckId(H5Screate_simple(rank, count, nullptr), "H5Screate"),
+                            H5Sclose);
+    h5::CheckOk(H5Dwrite(s.dataset.get(), H5T_NATIVE_DOUBLE, memory_space.get(), file_space.get(),
+                         H5P_DEFAULT, s.pending.data()),
+                "H5Dwrite" + what);
+    s.rows_on_disk += n;
+    s.pending.clear();
+  }
+
+  void WriteAllRows() {
+    for (auto& [name, s] : series) WriteRows(name, s);
+  }
+};
+
+H5Output::H5Output(const std::string& path, const std::string& scene_yaml,
+                   const std::string& version, double flush_seconds)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.path = path;
+  m.flush_seconds = flush_seconds;
+  m.file = h5::CreateFile(path, /*swmr=*/true, &m.swmr);
+  m.root =
+      h5::Handle(h5::CheckId(H5Gopen2(m.file.get(), "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);
+  h5::WriteStringAttribute(m.root.get(), "scene_yaml", scene_yaml);
+  h5::WriteStringAttribute(m.root.get(), "version", version);
+  Flush();  // a valid file from the start, even if the run is killed before its first flush
+}
+
+H5Output::~H5Output() {
+  try {
+    Close();
+  } catch (...) {
+    // A destructor must not throw; Close() reports the error to callers that want it.
+  }
+}
+
+void H5Output::AppendRow(const std::string& dataset, const double* values, int width) {
+  Impl& m = *impl_;
+  m.RequireOpen("AppendRow");
+  if (width < 1) throw std::invalid_argument("H5Output::AppendRow: width must be >= 1");
+  const std::string name = !dataset.empty() && dataset[0] == '/' ? dataset : "/" + dataset;
+  Series& s = m.GetSeries(name, width);
+  s.pending.insert(s.pending.end(), values, values + width);
+  // Write when the buffer reaches the next chunk boundary, so whole chunks go out in one piece.
+  const hsize_t to_boundary = kSeriesChunkRows - s.rows_on_disk % kSeriesChunkRows;
+  if (s.pending.size() / static_cast<size_t>(width) >= to_boundary) m.WriteRows(name, s);
+}
+
+void H5Output::WriteSnapshot(double time, const dem::Particles& particles) {
+  Impl& m = *impl_;
+  m.RequireOpen("WriteSnapshot");
+  const int64_t index = static_cast<int64_t>(m.snapshots.size());
+  m.snapshots.push_back(h5::WriteParticleSnapshot(m.file.get(), index, time, particles));
+  Flush();
+  h5::WriteXdmf(m.path, m.snapshots);
+}
+
+void H5Output::SetStateHash(uint64_t hash) {
+  impl_->RequireOpen("SetStateHash");
+  h5::WriteStateHash(impl_->root.get(), hash);
+}
+
+void H5Output::SetAttribute(const std::string& name, double value) {
+  impl_->RequireOpen("SetAttribute");
+  h5::WriteDoubleAttribute(impl_->root.get(), name, value);
+}
+
+void H5Output::SetAttribute(const std::string& name, const std::string& value) {
+  impl_->RequireOpen("SetAttribute");
+  h5::WriteStringAttribute(impl_->root.get(), name, value);
+}
+
+bool H5Output::MaybeFlush() {
+  Impl& m = *impl_;
+  if (!m.file.valid()) return false;
+  const auto now = std::chrono::steady_clock::now();
+  if (std::chrono::duration<double>(now - m.last_flush).count() < m.flush_seconds) return false;
+  Flush();
+  return true;
+}
+
+void H5Output::Flush() {
+  Impl& m = *impl_;
+  m.RequireOpen("Flush");
+  m.WriteAllRows();
+  h5::CheckOk(H5Fflush(m.file.get(), H5F_SCOPE_LOCAL), "H5Fflush " + m.path);
+  m.last_flush = std::chrono::steady_clock::now();
+}
+
+void H5Output::Close() {
+  Impl& m = *impl_;
+  if (!m.file.valid()) return;
+  // Write what is buffered, then close every handle even if writing failed.
+  std::exception_ptr error;
+  try {
+    m.WriteAllRows();
+  } catch (...) {
+    error = std::current_exception();
+  }
+  m.series.clear();
+  m.root.reset();
+  const herr_t status = m.file.reset();
+  if (error) std::rethrow_exception(error);
+  h5::CheckOk(status, "H5Fclose " + m.path);
+}
+
+void H5Output::set_flush_seconds(double seconds) { impl_->flush_seconds = seconds; }
+double H5Output::flush_seconds() const { return impl_->flush_seconds; }
+bool H5Output::is_open() const { return impl_->file.valid(); }
+const std::string& H5Output::path() const { return impl_->path; }
+std::string H5Output::xdmf_path() const { return h5::XdmfPath(impl_->path); }
+int64_t H5Output::snapshot_count() const { return static_cast<int64_t>(impl_->snapshots.size()); }
+bool H5Output::swmr() const { return impl_->swmr; }
+
+// ---------------------------------------------------------------------------------------------
+// Stop signals
+
+namespace {
+
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+void OnStopSignal(int signal_number) {
+  if (g_stop_signal != 0) {
+    // Second request: the user means it. Default action (terminate) once the handler returns.
+    std::signal(signal_number, SIG_DFL);
+    std::raise(signal_number);
+    return;
+  }
+  g_stop_signal = signal_number;
+}
+
+}  // namespace
+
+void InstallStopHandlers() {
+  struct sigaction action {};
+  action.sa_handler = OnStopSignal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+bool StopRequested() { return g_stop_signal != 0; }
+int StopSignal() { return g_stop_signal; }
+void ClearStopRequest() { g_stop_signal = 0; }
+
+}  // namespace sim

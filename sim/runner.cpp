@@ -1,1 +1,231 @@
-// placeholder
+#include "sim/runner.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "sim/bed.h"
+#include "sim/bed_io.h"
+#include "sim/h5_output.h"
+#include "sim/progress.h"
+
+namespace sim {
+namespace {
+
+// Exit statuses beyond 0 (done) and 2 (bad input, from the CLI).
+constexpr int kExitUnstable = 3;    // the simulation went unstable; the diagnostic says why
+constexpr int kExitStopped = 130;   // SIGINT/SIGTERM: outputs closed cleanly
+constexpr int kExitNotSettled = 4;  // the bed did not settle within settle.max_time
+
+std::unique_ptr<dem::System> MakeSystem(const Scene& scene, int threads) {
+  auto system = std::make_unique<dem::System>(scene.materials, MakeSystemConfig(scene));
+  if (threads > 0) system->set_num_threads(threads);
+  return system;
+}
+
+std::string ResolveBedPath(const Scene& scene) {
+  namespace fs = std::filesystem;
+  const fs::path p(scene.bed.file);
+  if (p.is_absolute()) return p.string();
+  return (fs::path(scene.path).parent_path() / p).string();
+}
+
+void ReportUnstable(const dem::StepStatus& status) {
+  std::fprintf(stderr, "scoopsim: simulation unstable: %s\n", status.message.c_str());
+}
+
+// Pours and settles the scene's bed into `system`, with progress on stderr.
+SettleReport Pour(const Scene& scene, dem::System* system, bool quiet) {
+  Progress progress("bed", scene.bed.settle_max_time, quiet);
+  const double t0 = system->time();
+  const SettleReport r = FillAndSettle(scene, system, [&](const dem::System& s) {
+    progress.Update(s.time() - t0, s.step_count() * static_cast<int64_t>(s.particles().size()));
+    return !StopRequested();
+  });
+  progress.Finish(system->time() - t0,
+                  system->step_count() * static_cast<int64_t>(system->particles().size()));
+  return r;
+}
+
+int CheckSettled(const Scene& scene, const SettleReport& r, const dem::System& system) {
+  if (!r.status.ok()) {
+    ReportUnstable(r.status);
+    return kExitUnstable;
+  }
+  if (StopRequested()) return kExitStopped;
+  if (static_cast<int64_t>(system.particles().size()) < scene.bed.count) {
+    std::fprintf(stderr,
+                 "scoopsim: %s: the box holds only %zu of bed.count = %lld particles; raise "
+                 "box.max or lower bed.count\n",
+                 scene.path.c_str(), system.particles().size(),
+                 static_cast<long long>(scene.bed.count));
+    return kExitNotSettled;
+  }
+  if (!r.settled) {
+    std::fprintf(stderr,
+                 "scoopsim: bed not settled after %.3g s (mean kinetic energy %.3g J > %.3g J); "
+                 "raise bed.settle.max_time or bed.settle.kinetic_energy\n",
+                 r.sim_time, r.mean_ke, scene.bed.settle_ke);
+    return kExitNotSettled;
+  }
+  return 0;
+}
+
+double PeakRssMb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+}  // namespace
+
+int MakeBed(const Scene& scene, const RunOptions& options) {
+  InstallStopHandlers();
+  auto system = MakeSystem(scene, options.threads);
+  const auto wall0 = std::chrono::steady_clock::now();
+  const SettleReport r = Pour(scene, system.get(), options.quiet);
+  const int status = CheckSettled(scene, r, *system);
+  if (status != 0 && status != kExitNotSettled) return status;
+  system->Canonicalize();
+  SaveBed(options.output, *system, scene.yaml_text);
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  std::fprintf(stderr, "scoopsim: bed of %zu particles, %d layer(s), %.3f s simulated in %.1f s; "
+               "saved %s\n", system->particles().size(), r.layers, r.sim_time, wall,
+               options.output.c_str());
+  return status;
+}
+
+int RunScene(const Scene& scene, const RunOptions& options) {
+  InstallStopHandlers();
+  auto system = MakeSystem(scene, options.threads);
+  if (!scene.bed.file.empty()) {
+    LoadBed(ResolveBedPath(scene), system.get());
+    system->Canonicalize();
+  } else {
+    const SettleReport r = Pour(scene, system.get(), options.quiet);
+    const int status = CheckSettled(scene, r, *system);
+    if (status != 0) return status;
+    system->Canonicalize();
+  }
+
+  H5Output out(options.output, scene.yaml_text, SCOOPSIM_VERSION, scene.output.flush_seconds);
+  const int num_planes = static_cast<int>(system->config().planes.size());
+  auto record = [&] {
+    const double t = system->time();
+    out.AppendRow("/series/time", &t, 1);
+    const double ke = system->KineticEnergy();
+    out.AppendRow("/series/kinetic_energy", &ke, 1);
+    const double contacts = static_cast<double>(system->neighbor_stats().contacts);
+    out.AppendRow("/series/contacts", &contacts, 1);
+    std::vector<double> forces;
+    for (int k = 0; k < num_planes; ++k) {
+      const dem::Vec3 f = system->plane_force(k);
+      forces.insert(forces.end(), {f.x, f.y, f.z});
+    }
+    out.AppendRow("/series/wall_force", forces.data(), 3 * num_planes);
+  };
+
+  const double t_end = system->time() + scene.duration;
+  const int64_t n = static_cast<int64_t>(system->particles().size());
+  Progress progress("run", scene.duration, options.quiet);
+  const double t_start = system->time();
+  double next_record = system->time();
+  int exit_status = 0;
+  if (scene.output.snapshot_every > 0) out.WriteSnapshot(system->time(), system->particles());
+  const int64_t step0 = system->step_count();
+  while (system->time() < t_end - 0.5 * scene.time_step) {
+    const dem::StepStatus status = system->Step();
+    if (!status.ok()) {
+      ReportUnstable(status);
+      exit_status = kExitUnstable;
+      break;
+    }
+    const int64_t steps = system->step_count() - step0;
+    if (system->time() >= next_record) {
+      record();
+      next_record += scene.output.interval;
+    }
+    if (scene.output.snapshot_every > 0 && steps % scene.output.snapshot_every == 0)
+      out.WriteSnapshot(system->time(), system->particles());
+    if (steps % 64 == 0) {
+      out.MaybeFlush();
+      progress.Update(system->time() - t_start, steps * n);
+      if (StopRequested()) {
+        std::fprintf(stderr, "scoopsim: stopped by signal %d at t = %.6g s; output closed\n",
+                     StopSignal(), system->time());
+        exit_status = kExitStopped;
+        break;
+      }
+    }
+  }
+  progress.Finish(system->time() - t_start, (system->step_count() - step0) * n);
+  out.SetStateHash(system->StateHash());
+  out.SetAttribute("time", system->time());
+  out.Close();
+  std::fprintf(stderr, "scoopsim: wrote %s (ParaView: %s)\n", out.path().c_str(),
+               out.xdmf_path().c_str());
+  return exit_status;
+}
+
+int BenchSettle(const BenchSettleOptions& options) {
+  namespace fs = std::filesystem;
+  // The benchmark bed of the foundation issue (scenes/bench_settle.yaml): snow spheres of 3.5 mm
+  // (paper Table 6) on a 0.2 m x 0.1 m floor, gravity 1.3, dt = 0.2 t_R, skin 0.875 mm. Only the
+  // particle count changes with --particles; the box grows in height to hold the loose fill.
+  const std::string source = SCOOPSIM_SOURCE_DIR;
+  Scene scene = LoadScene(source + "/scenes/bench_settle.yaml");
+  if (options.particles <= 0) throw InputError("bench settle: --particles: expected > 0");
+  if (options.steps <= 0) throw InputError("bench settle: --steps: expected > 0");
+  const double r = scene.bed.radius_max;
+  const double area = (scene.box_max.x - scene.box_min.x) * (scene.box_max.y - scene.box_min.y);
+  const double loose_height =
+      options.particles * 4.0 / 3.0 * M_PI * r * r * r / (scene.bed.fill_fraction * area);
+  scene.bed.count = options.particles;
+  scene.box_max.z = std::max(scene.box_max.z, scene.box_min.z + 1.2 * loose_height + 4 * r);
+
+  const std::string dir = options.cache_dir.empty() ? source + "/bench/cache" : options.cache_dir;
+  const std::string bed_path =
+      dir + "/settle_" + std::to_string(options.particles) + ".h5";
+  auto system = MakeSystem(scene, options.threads);
+  if (fs::exists(bed_path)) {
+    LoadBed(bed_path, system.get());
+  } else {
+    std::fprintf(stderr, "scoopsim bench: preparing %s (once)\n", bed_path.c_str());
+    InstallStopHandlers();
+    const SettleReport rep = Pour(scene, system.get(), false);
+    const int status = CheckSettled(scene, rep, *system);
+    if (status != 0 && status != kExitNotSettled) return status;
+    system->Canonicalize();
+    SaveBed(bed_path, *system, scene.yaml_text);
+  }
+  system->Canonicalize();
+  const int64_t n = static_cast<int64_t>(system->particles().size());
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int64_t k = 0; k < options.steps; ++k) {
+    const dem::StepStatus status = system->Step();
+    if (!status.ok()) {
+      ReportUnstable(status);
+      return kExitUnstable;
+    }
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const dem::NeighborStats ns = system->neighbor_stats();
+  std::printf(
+      "{\"bench\":\"settle\",\"particles\":%lld,\"steps\":%lld,\"threads\":%d,\"wall_s\":%.4f,"
+      "\"particle_steps_per_s\":%.4g,\"contacts_per_particle\":%.3f,\"neighbor_builds\":%lld,"
+      "\"peak_rss_mb\":%.1f,\"state_hash\":\"%016llx\"}\n",
+      static_cast<long long>(n), static_cast<long long>(options.steps), system->num_threads(),
+      wall, n * static_cast<double>(options.steps) / wall,
+      (2.0 * ns.contacts + ns.wall_contacts) / std::max<int64_t>(n, 1),
+      static_cast<long long>(ns.builds), PeakRssMb(),
+      static_cast<unsigned long long>(system->StateHash()));
+  return 0;
+}
+
+}  // namespace sim

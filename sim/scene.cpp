@@ -1,1 +1,516 @@
-// placeholder
+// Scene and materials loading (yaml-cpp). Every value is checked here, once, so the rest of the
+// program can trust a Scene. Each error is one line:
+//   FILE:LINE: KEY: expected WHAT, got WHAT-WAS-THERE
+// LINE is 1-based (yaml-cpp marks are 0-based); KEY is the dotted path of the offending value;
+// FILE is the path exactly as the user gave it (materials files: joined to the scene's folder).
+#include "sim/scene.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <initializer_list>
+#include <map>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+namespace sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kMaxRayleighFraction = 0.3;  // DEM practice: dt in 0.2..0.3 t_R (paper eq. 4)
+
+// A double with 6 significant digits, for messages.
+std::string Num(double v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v;
+  return s.str();
+}
+
+// A whole number held in a double, for messages.
+std::string Int(double v) { return std::to_string(static_cast<long long>(v)); }
+
+// 1-based line of a node, or 1 for a node without a mark (e.g. an empty document).
+int LineOf(const YAML::Node& node) {
+  const int line = node.Mark().line;
+  return line >= 0 ? line + 1 : 1;
+}
+
+// One-line description of what a node holds, as written: "-1", "[2e-3, 1e-3]", "a map".
+std::string Describe(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Scalar:
+      return node.Scalar().empty() ? "an empty string" : node.Scalar();
+    case YAML::NodeType::Sequence: {
+      std::string out = "[";
+      for (size_t i = 0; i < node.size(); ++i) {
+        if (i > 0) out += ", ";
+        const YAML::Node item = node[i];
+        out += item.IsScalar() ? item.Scalar() : (item.IsMap() ? "{...}" : Describe(item));
+      }
+      return out + "]";
+    }
+    case YAML::NodeType::Map:
+      return "a map";
+    case YAML::NodeType::Null:
+      return "nothing";
+    case YAML::NodeType::Undefined:
+    default:
+      return "nothing (key missing)";
+  }
+}
+
+std::string Join(const std::vector<std::string>& items, const char* sep = ", ") {
+  std::string out;
+  for (size_t i = 0; i < items.size(); ++i) out += (i ? sep : "") + items[i];
+  return out;
+}
+
+// The one place an InputError about a file's content is made.
+[[noreturn]] void Fail(const std::string& file, int line, const std::string& key,
+                       const std::string& expected, const std::string& got,
+                       const std::string& note = "") {
+  std::string message =
+      file + ":" + std::to_string(line) + ": " + key + ": expected " + expected + ", got " + got;
+  if (!note.empty()) message += " (" + note + ")";
+  throw InputError(message);
+}
+
+// Reads the whole file; false when it cannot be opened as a regular file.
+bool ReadFile(const std::string& path, std::string* text) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  *text = buffer.str();
+  return true;
+}
+
+// Parses YAML text; syntax errors become one-line InputErrors at the line yaml-cpp reports.
+YAML::Node Parse(const std::string& file, const std::string& text) {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    const int line = e.mark.line >= 0 ? e.mark.line + 1 : 1;
+    Fail(file, line, "syntax", "valid YAML", "a syntax error: " + e.msg);
+  } catch (const YAML::Exception& e) {
+    const int line = e.mark.line >= 0 ? e.mark.line + 1 : 1;
+    Fail(file, line, "syntax", "valid YAML", "an error: " + e.msg);
+  }
+}
+
+// A YAML map being read: rejects unknown keys up front and gives typed, range-checked values
+// addressed by their dotted path.
+class MapReader {
+ public:
+  // `path` is the dotted path of the map itself ("" for the document root).
+  MapReader(const std::string& file, const YAML::Node& node, std::string path,
+            std::initializer_list<const char*> allowed)
+      : file_(file), node_(node), path_(std::move(path)) {
+    for (const char* key : allowed) allowed_.emplace_back(key);
+    if (!node_.IsMap()) {
+      Fail(file_, LineOf(node_), path_.empty() ? "(top level)" : path_,
+           "a map with keys " + Join(allowed_), Describe(node_));
+    }
+    std::map<std::string, int> seen;  // key -> line, to reject duplicates
+    for (auto it = node_.begin(); it != node_.end(); ++it) {
+      const YAML::Node key_node = it->first;
+      if (!key_node.IsScalar()) {
+        Fail(file_, LineOf(key_node), path_.empty() ? "(top level)" : path_,
+             "plain keys (" + Join(allowed_) + ")", "a key that is " + Describe(key_node));
+      }
+      const std::string key = key_node.Scalar();
+      bool known = false;
+      for (const auto& a : allowed_) known = known || a == key;
+      if (!known) {
+        Fail(file_, LineOf(key_node), Key(key), "one of the keys " + Join(allowed_),
+             "an unknown key '" + key + "'");
+      }
+      const auto [where, inserted] = seen.emplace(key, LineOf(key_node));
+      if (!inserted) {
+        Fail(file_, LineOf(key_node), Key(key), "each key once", "a second '" + key + "'",
+             "first at line " + std::to_string(where->second));
+      }
+    }
+  }
+
+  bool Has(const char* key) const { return static_cast<bool>(node_[key]); }
+  const YAML::Node& node() const { return node_; }
+  const std::string& file() const { return file_; }
+  // Dotted path of a key of this map.
+  std::string Key(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  // The value of a required key; a missing key is reported at the line of the map.
+  YAML::Node Need(const char* key, const std::string& expected) const {
+    const YAML::Node value = node_[key];
+    if (!value) Fail(file_, LineOf(node_), Key(key), expected, "nothing (key missing)");
+    return value;
+  }
+
+  // A finite number satisfying `ok`; `expected` says what `ok` accepts ("a number > 0").
+  double Number(const char* key, const std::string& expected,
+                const std::function<bool(double)>& ok) const {
+    return CheckNumber(Need(key, expected), Key(key), expected, ok);
+  }
+  double Number(const char* key, double fallback, const std::string& expected,
+                const std::function<bool(double)>& ok) const {
+    return Has(key) ? Number(key, expected, ok) : fallback;
+  }
+
+  // An integer satisfying `ok`.
+  int64_t Integer(const char* key, const std::string& expected,
+                  const std::function<bool(int64_t)>& ok) const {
+    const YAML::Node value = Need(key, expected);
+    long long v = 0;
+    if (!value.IsScalar() || !YAML::convert<long long>::decode(value, v) || !ok(v)) {
+      Fail(file_, LineOf(value), Key(key), expected, Describe(value));
+    }
+    return v;
+  }
+  int64_t Integer(const char* key, int64_t fallback, const std::string& expected,
+                  const std::function<bool(int64_t)>& ok) const {
+    return Has(key) ? Integer(key, expected, ok) : fallback;
+  }
+
+  // A non-empty string.
+  std::string String(const char* key, const std::string& expected) const {
+    const YAML::Node value = Need(key, expected);
+    if (!value.IsScalar() || value.Scalar().empty()) {
+      Fail(file_, LineOf(value), Key(key), expected, Describe(value));
+    }
+    return value.Scalar();
+  }
+
+  // [x, y, z] of finite numbers.
+  dem::Vec3 Vector(const char* key, const std::string& expected) const {
+    const YAML::Node value = Need(key, expected);
+    if (!value.IsSequence() || value.size() != 3) {
+      Fail(file_, LineOf(value), Key(key), expected, Describe(value));
+    }
+    double c[3];
+    for (int i = 0; i < 3; ++i) {
+      c[i] = CheckNumber(
+          value[i], Key(key), expected, [](double) { return true; }, &value);
+    }
+    return {c[0], c[1], c[2]};
+  }
+
+  // Checks a scalar number; errors quote `whole` (the enclosing list) when given.
+  double CheckNumber(const YAML::Node& value, const std::string& key, const std::string& expected,
+                     const std::function<bool(double)>& ok,
+                     const YAML::Node* whole = nullptr) const {
+    double v = 0;
+    if (!value.IsScalar() || !YAML::convert<double>::decode(value, v) || !std::isfinite(v) ||
+        !ok(v)) {
+      Fail(file_, LineOf(value), key, expected, Describe(whole ? *whole : value));
+    }
+    return v;
+  }
+
+ private:
+  std::string file_;
+  YAML::Node node_;
+  std::string path_;
+  std::vector<std::string> allowed_;
+};
+
+bool Positive(double v) { return v > 0; }
+bool NonNegative(double v) { return v >= 0; }
+
+// Mean sphere volume of radii uniform in [a, b]: (4/3) pi E[r^3], E[r^3] = (b^4 - a^4) / 4(b - a).
+double MeanSphereVolume(double a, double b) {
+  const double mean_r3 = b > a ? (b * b * b * b - a * a * a * a) / (4.0 * (b - a)) : a * a * a;
+  return 4.0 / 3.0 * kPi * mean_r3;
+}
+
+// Path of a file named in `owner_file`, relative to its folder unless absolute. Not normalised,
+// so messages show the user's own spelling.
+std::string ResolveAgainst(const std::string& owner_file, const std::string& name) {
+  const std::filesystem::path p(name);
+  if (p.is_absolute()) return name;
+  return (std::filesystem::path(owner_file).parent_path() / p).string();
+}
+
+void ParseMaterials(const std::string& file, const YAML::Node& root, dem::MaterialTable* table) {
+  const MapReader top(file, root, "", {"materials", "interactions", "source", "notes"});
+
+  // Materials: name -> {density, shear_modulus, poisson}.
+  const YAML::Node materials =
+      top.Need("materials", "a map of material name -> {density, shear_modulus, poisson}");
+  if (!materials.IsMap() || materials.size() == 0) {
+    Fail(file, LineOf(materials), "materials",
+         "a non-empty map of material name -> {density, shear_modulus, poisson}",
+         Describe(materials));
+  }
+  std::vector<std::string> names;
+  for (auto it = materials.begin(); it != materials.end(); ++it) {
+    const YAML::Node name_node = it->first;
+    if (!name_node.IsScalar() || name_node.Scalar().empty()) {
+      Fail(file, LineOf(name_node), "materials", "material names", Describe(name_node));
+    }
+    const std::string name = name_node.Scalar();
+    const std::string path = "materials." + name;
+    if (table->Find(name) >= 0) {
+      Fail(file, LineOf(name_node), path, "each material name once", "a second '" + name + "'");
+    }
+    const MapReader m(file, it->second, path,
+                      {"density", "shear_modulus", "poisson", "source", "notes"});
+    dem::Material material;
+    material.name = name;
+    material.density = m.Number("density", "a number > 0 (solid density, kg/m^3)", Positive);
+    material.shear_modulus =
+        m.Number("shear_modulus", "a number > 0 (shear modulus G, Pa)", Positive);
+    material.poisson = m.Number("poisson", "a number in [0, 0.5) (Poisson's ratio)",
+                                [](double v) { return v >= 0 && v < 0.5; });
+    table->Add(material);
+    names.push_back(name);
+  }
+  const std::string known = Join(names);
+
+  // Interactions: a list of {pair: [a, b], restitution, friction, rolling_friction}.
+  const YAML::Node interactions =
+      top.Need("interactions", "a list of {pair: [a, b], restitution, friction, rolling_friction}");
+  if (!interactions.IsSequence()) {
+    Fail(file, LineOf(interactions), "interactions",
+         "a list of {pair: [a, b], restitution, friction, rolling_friction}",
+         Describe(interactions));
+  }
+  std::map<std::pair<int, int>, int> defined;  // pair -> line of its first definition
+  for (size_t i = 0; i < interactions.size(); ++i) {
+    const std::string path = "interactions[" + std::to_string(i) + "]";
+    const MapReader in(file, interactions[i], path,
+                       {"pair", "restitution", "friction", "rolling_friction", "source", "notes"});
+    const std::string pair_expected = "two material names from materials (" + known + ")";
+    const YAML::Node pair = in.Need("pair", pair_expected);
+    if (!pair.IsSequence() || pair.size() != 2 || !pair[0].IsScalar() || !pair[1].IsScalar()) {
+      Fail(file, LineOf(pair), in.Key("pair"), pair_expected, Describe(pair));
+    }
+    const int a = table->Find(pair[0].Scalar());
+    const int b = table->Find(pair[1].Scalar());
+    if (a < 0 || b < 0) Fail(file, LineOf(pair), in.Key("pair"), pair_expected, Describe(pair));
+    const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+    const auto [where, inserted] = defined.emplace(key, LineOf(pair));
+    if (!inserted) {
+      Fail(file, LineOf(pair), in.Key("pair"), "each pair once", Describe(pair) + " again",
+           "first at line " + std::to_string(where->second));
+    }
+    const std::string note = "pair " + Describe(pair);
+    dem::Interaction interaction;
+    const auto number = [&](const char* k, const std::string& expected,
+                            const std::function<bool(double)>& ok) {
+      const YAML::Node value = in.Need(k, expected);
+      double v = 0;
+      if (!value.IsScalar() || !YAML::convert<double>::decode(value, v) || !std::isfinite(v) ||
+          !ok(v)) {
+        Fail(file, LineOf(value), in.Key(k), expected, Describe(value), note);
+      }
+      return v;
+    };
+    interaction.restitution =
+        number("restitution", "a number in (0, 1] (coefficient of restitution)",
+               [](double v) { return v > 0 && v <= 1; });
+    interaction.friction = number("friction", "a number >= 0 (static friction)", NonNegative);
+    interaction.rolling_friction =
+        number("rolling_friction", "a number >= 0 (rolling friction)", NonNegative);
+    table->SetInteraction(a, b, interaction);
+  }
+}
+
+}  // namespace
+
+void LoadMaterials(const std::string& path, dem::MaterialTable* table) {
+  std::string text;
+  if (!ReadFile(path, &text)) throw InputError(path + ": cannot open materials file");
+  ParseMaterials(path, Parse(path, text), table);
+}
+
+Scene LoadScene(const std::string& path) {
+  Scene scene;
+  scene.path = path;
+  if (!ReadFile(path, &scene.yaml_text)) throw InputError(path + ": cannot open scene file");
+  const YAML::Node root = Parse(path, scene.yaml_text);
+  if (root.IsNull()) Fail(path, 1, "(top level)", "a map of scene keys", "an empty file");
+  const MapReader top(path, root, "",
+                      {"materials", "gravity", "time_step", "neighbor", "box", "bed", "duration",
+                       "output", "threads", "notes"});
+
+  // Materials file, relative to the scene's folder.
+  const std::string materials_expected = "the path of a readable materials file";
+  const std::string materials_name = top.String("materials", materials_expected);
+  scene.materials_path = ResolveAgainst(path, materials_name);
+  {
+    std::string text;
+    if (!ReadFile(scene.materials_path, &text)) {
+      Fail(path, LineOf(root["materials"]), "materials", materials_expected, materials_name,
+           "cannot open " + scene.materials_path);
+    }
+    ParseMaterials(scene.materials_path, Parse(scene.materials_path, text), &scene.materials);
+  }
+
+  scene.gravity = top.Vector("gravity", "a list of 3 numbers [gx, gy, gz] (m/s^2)");
+
+  // Time step as a fraction of the Rayleigh time (paper eq. 4).
+  if (top.Has("time_step")) {
+    const MapReader ts(path, root["time_step"], "time_step", {"rayleigh_fraction"});
+    const YAML::Node f = ts.Need("rayleigh_fraction", "a number in (0, 0.3]");
+    double v = 0;
+    if (!f.IsScalar() || !YAML::convert<double>::decode(f, v) || !std::isfinite(v) || v <= 0) {
+      Fail(path, LineOf(f), ts.Key("rayleigh_fraction"), "a number in (0, 0.3]", Describe(f),
+           "dt = rayleigh_fraction * t_R");
+    }
+    if (v > kMaxRayleighFraction) {
+      Fail(path, LineOf(f), ts.Key("rayleigh_fraction"), "a number in (0, 0.3]", Describe(f),
+           "time step too large: explicit DEM needs dt <= 0.3 t_R, the Rayleigh time of eq. 4");
+    }
+    scene.rayleigh_fraction = v;
+  }
+
+  // Bed: what to fill the box with.
+  const YAML::Node bed_node = top.Need("bed", "a map with keys material, radius, count");
+  const MapReader bed(path, bed_node, "bed",
+                      {"material", "radius", "count", "seed", "fill_fraction", "settle", "file"});
+  BedSpec& spec = scene.bed;
+  spec.material = bed.String("material", "a material name");
+  {
+    const std::string expected = "a number > 0 or a range [rmin, rmax] with 0 < rmin <= rmax (m)";
+    const YAML::Node r = bed.Need("radius", expected);
+    if (r.IsSequence()) {
+      if (r.size() != 2) Fail(path, LineOf(r), "bed.radius", expected, Describe(r));
+      spec.radius_min = bed.CheckNumber(r[0], "bed.radius", expected, Positive, &r);
+      spec.radius_max = bed.CheckNumber(r[1], "bed.radius", expected, Positive, &r);
+      if (spec.radius_min > spec.radius_max) {
+        Fail(path, LineOf(r), "bed.radius", expected, Describe(r), "range reversed");
+      }
+    } else {
+      spec.radius_min = spec.radius_max = bed.CheckNumber(r, "bed.radius", expected, Positive);
+    }
+  }
+  spec.count = bed.Integer("count", "an integer > 0", [](int64_t v) { return v > 0; });
+  spec.seed = static_cast<uint64_t>(
+      bed.Integer("seed", 1, "an integer >= 0", [](int64_t v) { return v >= 0; }));
+  spec.fill_fraction = bed.Number("fill_fraction", spec.fill_fraction,
+                                  "a number in (0, 0.5] (solid fraction of the loose fill)",
+                                  [](double v) { return v > 0 && v <= 0.5; });
+  if (bed.Has("settle")) {
+    const MapReader settle(path, bed_node["settle"], "bed.settle", {"kinetic_energy", "max_time"});
+    spec.settle_ke =
+        settle.Number("kinetic_energy", spec.settle_ke, "a number > 0 (J per particle)", Positive);
+    spec.settle_max_time =
+        settle.Number("max_time", spec.settle_max_time, "a number > 0 (s)", Positive);
+  }
+  if (bed.Has("file")) {
+    spec.file = ResolveAgainst(path, bed.String("file", "the path of a saved bed (.h5)"));
+  }
+
+  // Container: floor and four side walls.
+  const YAML::Node box_node = top.Need("box", "a map with keys min, max, wall_material");
+  const MapReader box(path, box_node, "box", {"min", "max", "wall_material"});
+  scene.box_min = box.Vector("min", "a list of 3 numbers [x, y, z] (m)");
+  scene.box_max = box.Vector("max", "a list of 3 numbers [x, y, z] (m)");
+  for (int i = 0; i < 3; ++i) {
+    if (!(scene.box_max[i] > scene.box_min[i])) {
+      const char* axis = i == 0 ? "x" : (i == 1 ? "y" : "z");
+      Fail(path, LineOf(box_node["max"]), "box.max", "every component greater than box.min's",
+           Describe(box_node["max"]),
+           std::string(axis) + ": max " + Num(scene.box_max[i]) + " <= min " +
+               Num(scene.box_min[i]));
+    }
+  }
+  scene.wall_material = box.String("wall_material", "a material name");
+
+  // Materials named by the scene exist, and every pair that can meet has an interaction.
+  const int bed_material = scene.materials.Find(spec.material);
+  const auto names = [&] {
+    std::vector<std::string> all;
+    for (int i = 0; i < scene.materials.size(); ++i) all.push_back(scene.materials[i].name);
+    return Join(all);
+  };
+  if (bed_material < 0) {
+    Fail(path, LineOf(bed_node["material"]), "bed.material",
+         "a material defined in " + scene.materials_path + " (" + names() + ")", spec.material);
+  }
+  const int wall_material = scene.materials.Find(scene.wall_material);
+  if (wall_material < 0) {
+    Fail(path, LineOf(box_node["wall_material"]), "box.wall_material",
+         "a material defined in " + scene.materials_path + " (" + names() + ")",
+         scene.wall_material);
+  }
+  if (!scene.materials.has_interaction(bed_material, bed_material)) {
+    Fail(path, LineOf(bed_node["material"]), "bed.material",
+         "an interaction for the pair [" + spec.material + ", " + spec.material + "] in " +
+             scene.materials_path,
+         "none");
+  }
+  if (!scene.materials.has_interaction(bed_material, wall_material)) {
+    Fail(path, LineOf(box_node["wall_material"]), "box.wall_material",
+         "an interaction for the pair [" + spec.material + ", " + scene.wall_material + "] in " +
+             scene.materials_path,
+         "none");
+  }
+
+  // The bed fits the box. The bed is poured in rounds (sim/bed.h), each a loose lattice fill of
+  // pitch a = max(cbrt(mean sphere volume / fill_fraction), 2 rmax) above the bed so far
+  // (dem/insertion.h), so the box must hold one lattice cell in every direction and the settled
+  // bed, at a solid fraction of about 0.59, must lie below the box's top.
+  constexpr double kSettledSolidFraction = 0.59;
+  const dem::Vec3 extent = scene.box_max - scene.box_min;
+  const double mean_volume = MeanSphereVolume(spec.radius_min, spec.radius_max);
+  const double pitch =
+      std::max(std::cbrt(mean_volume / spec.fill_fraction), 2.0 * spec.radius_max * (1.0 + 1e-9));
+  if (std::min({extent.x, extent.y, extent.z}) < pitch) {
+    Fail(path, LineOf(box_node["max"]), "box.max",
+         "a box at least " + Num(pitch) +
+             " m along x, y and z (one insertion cell for bed.radius at bed.fill_fraction)",
+         "a box of " + Num(extent.x) + " x " + Num(extent.y) + " x " + Num(extent.z) + " m");
+  }
+  const double floor_area = extent.x * extent.y;
+  const double settled_height =
+      static_cast<double>(spec.count) * mean_volume / (kSettledSolidFraction * floor_area);
+  if (settled_height > extent.z) {
+    const double max_count =
+        std::floor(kSettledSolidFraction * floor_area * extent.z / mean_volume);
+    Fail(path, LineOf(bed_node["count"]), "bed.count",
+         "a bed that fits the box: at most " + Int(max_count) + " spheres settle below its " +
+             Num(extent.z) + " m height at a solid fraction of ~0.59",
+         std::to_string(spec.count),
+         "the settled bed would be " + Num(settled_height) +
+             " m high; raise box.max z or lower bed.count");
+  }
+
+  // Neighbour search skin; default a quarter of the smallest diameter.
+  scene.skin = 0.5 * spec.radius_min;
+  if (top.Has("neighbor")) {
+    const MapReader neighbor(path, root["neighbor"], "neighbor", {"skin"});
+    scene.skin = neighbor.Number("skin", scene.skin, "a number > 0 (m)", Positive);
+  }
+
+  scene.duration = top.Number("duration", 0.0, "a number >= 0 (s)", NonNegative);
+  if (top.Has("output")) {
+    const MapReader out(path, root["output"], "output",
+                        {"interval", "snapshot_every", "flush_seconds"});
+    scene.output.interval =
+        out.Number("interval", scene.output.interval, "a number > 0 (s)", Positive);
+    scene.output.snapshot_every =
+        out.Integer("snapshot_every", scene.output.snapshot_every,
+                    "an integer >= 0 (steps; 0 = no snapshots)", [](int64_t v) { return v >= 0; });
+    scene.output.flush_seconds =
+        out.Number("flush_seconds", scene.output.flush_seconds, "a number > 0 (s)", Positive);
+  }
+  scene.threads =
+      static_cast<int>(top.Integer("threads", 0, "an integer in [0, 4096] (0 = all cores)",
+                                   [](int64_t v) { return v >= 0 && v <= 4096; }));
+
+  // Derived time step: a fraction of the Rayleigh time of the smallest sphere (paper eq. 4).
+  scene.time_step = scene.rayleigh_fraction *
+                    dem::RayleighTimeStep(spec.radius_min, scene.materials[bed_material]);
+  return scene;
+}
+
+}  // namespace sim

@@ -1,1 +1,602 @@
-// placeholder
+// Tests sim/scene.cpp: the shipped scenes load with the time step of paper eq. 4, every malformed
+// scene is refused with one line naming file, line, key and expectation, and the CLI turns such an
+// error into exit status 2 and one line on stderr.
+#include "sim/scene.h"
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+const std::string kSourceDir = SCOOPSIM_SOURCE_DIR;
+
+// Paper eq. 4 (Rayleigh time step), written out: t_R = pi R sqrt(rho / G) / (0.1631 nu + 0.8766).
+double RayleighClosedForm(double radius, double density, double shear_modulus, double poisson) {
+  return kPi * radius * std::sqrt(density / shear_modulus) / (0.1631 * poisson + 0.8766);
+}
+
+// A fresh folder per test process under the system temp dir, removed when the process exits.
+class TempFolder {
+ public:
+  TempFolder()
+      : path_(std::filesystem::temp_directory_path() /
+              ("scoopsim_scene_test_" + std::to_string(::getpid()))) {
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempFolder() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+std::filesystem::path TempDir() {
+  static const TempFolder folder;
+  return folder.path();
+}
+
+std::string WriteFile(const std::string& name, const std::string& text) {
+  const std::string path = (TempDir() / name).string();
+  std::ofstream(path) << text;
+  return path;
+}
+
+// ---------------------------------------------------------------------------------------------
+// (a) Shipped scenes and materials.
+
+TEST(SceneTest, ShippedScenesLoadWithRayleighTimeStep) {
+  struct Expected {
+    const char* file;
+    int64_t count;
+    double fraction;
+  };
+  // Snow (Table 6): rho 300 kg/m^3, G 1e7 Pa, nu 0.36; every shipped scene uses r = 1.75 mm.
+  const Expected cases[] = {
+      {"settle_small.yaml", 2000, 0.2},
+      {"default.yaml", 8000, 0.2},
+      {"bench_settle.yaml", 50000, 0.2},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.file);
+    const Scene scene = LoadScene(kSourceDir + "/scenes/" + c.file);
+    EXPECT_EQ(scene.bed.material, "snow");
+    EXPECT_EQ(scene.bed.count, c.count);
+    EXPECT_EQ(scene.bed.radius_min, 1.75e-3);
+    EXPECT_EQ(scene.bed.radius_max, 1.75e-3);
+    EXPECT_EQ(scene.rayleigh_fraction, c.fraction);
+    const double expected = c.fraction * RayleighClosedForm(1.75e-3, 300.0, 1.0e7, 0.36);
+    EXPECT_NEAR(scene.time_step, expected, 1e-12 * expected);
+    // t_R = 3.2e-5 s for 3.5 mm snow spheres: a sanity check of the closed form itself.
+    EXPECT_NEAR(expected / c.fraction, 3.2e-5, 0.05e-5);
+    EXPECT_EQ(scene.gravity.z, -1.3);
+    EXPECT_EQ(scene.wall_material, "wall");
+    EXPECT_GT(scene.skin, 0.0);
+    EXPECT_FALSE(scene.yaml_text.empty());
+    EXPECT_EQ(scene.path, kSourceDir + "/scenes/" + c.file);
+    EXPECT_EQ(scene.materials_path, kSourceDir + "/scenes/materials.yaml");
+  }
+}
+
+TEST(SceneTest, BenchSettleSceneMatchesTheBenchmarkSpec) {
+  const Scene scene = LoadScene(kSourceDir + "/scenes/bench_settle.yaml");
+  EXPECT_EQ(scene.bed.count, 50000);
+  EXPECT_EQ(scene.skin, 0.875e-3);
+  EXPECT_NEAR(scene.box_max.x - scene.box_min.x, 0.2, 1e-15);
+  EXPECT_NEAR(scene.box_max.y - scene.box_min.y, 0.1, 1e-15);
+}
+
+TEST(SceneTest, DefaultsApplyWhenOptionalKeysAreLeftOut) {
+  WriteFile("defaults_mats.yaml", R"(materials:
+  snow: {density: 300, shear_modulus: 1.0e7, poisson: 0.36}
+  wall: {density: 7850, shear_modulus: 7.9e10, poisson: 0.3}
+interactions:
+  - {pair: [snow, snow], restitution: 0.88, friction: 0.58, rolling_friction: 0.05}
+  - {pair: [wall, snow], restitution: 0.7, friction: 0.58, rolling_friction: 0.05}
+)");
+  const std::string path = WriteFile("defaults.yaml", R"(materials: defaults_mats.yaml
+gravity: [0, 0, -9.81]
+box: {min: [0, 0, 0], max: [0.05, 0.05, 0.08], wall_material: wall}
+bed: {material: snow, radius: [1.0e-3, 2.0e-3], count: 100}
+)");
+  const Scene scene = LoadScene(path);
+  EXPECT_EQ(scene.rayleigh_fraction, 0.2);
+  EXPECT_EQ(scene.bed.radius_min, 1.0e-3);
+  EXPECT_EQ(scene.bed.radius_max, 2.0e-3);
+  EXPECT_EQ(scene.skin, 0.25 * 2.0 * 1.0e-3);  // a quarter of the smallest diameter
+  EXPECT_EQ(scene.bed.seed, 1u);
+  EXPECT_EQ(scene.bed.fill_fraction, 0.35);
+  EXPECT_EQ(scene.duration, 0.0);
+  EXPECT_EQ(scene.threads, 0);
+  EXPECT_TRUE(scene.bed.file.empty());
+  // The smallest radius sets the time step.
+  const double expected = 0.2 * RayleighClosedForm(1.0e-3, 300.0, 1.0e7, 0.36);
+  EXPECT_NEAR(scene.time_step, expected, 1e-12 * expected);
+  // The interaction given as [wall, snow] serves both orders.
+  const int snow = scene.materials.Find("snow"), wall = scene.materials.Find("wall");
+  EXPECT_TRUE(scene.materials.has_interaction(snow, wall));
+  EXPECT_EQ(scene.materials.interaction(snow, wall).restitution, 0.7);
+}
+
+TEST(SceneTest, BedFileIsResolvedAgainstTheScenesFolder) {
+  WriteFile("bedfile_mats.yaml", R"(materials:
+  snow: {density: 300, shear_modulus: 1.0e7, poisson: 0.36}
+  wall: {density: 7850, shear_modulus: 7.9e10, poisson: 0.3}
+interactions:
+  - {pair: [snow, snow], restitution: 0.88, friction: 0.58, rolling_friction: 0.05}
+  - {pair: [snow, wall], restitution: 0.7, friction: 0.58, rolling_friction: 0.05}
+)");
+  const std::string path = WriteFile("bedfile.yaml", R"(materials: bedfile_mats.yaml
+gravity: [0, 0, -1.3]
+box: {min: [0, 0, 0], max: [0.05, 0.05, 0.08], wall_material: wall}
+bed: {material: snow, radius: 1.75e-3, count: 100, file: beds/x.h5}
+)");
+  const Scene scene = LoadScene(path);
+  EXPECT_EQ(scene.bed.file, (TempDir() / "beds" / "x.h5").string());
+  EXPECT_EQ(scene.materials_path, (TempDir() / "bedfile_mats.yaml").string());
+}
+
+TEST(SceneTest, ShippedMaterialsHaveEveryPairThatCanMeet) {
+  dem::MaterialTable table;
+  LoadMaterials(kSourceDir + "/scenes/materials.yaml", &table);
+  struct Expected {
+    const char* name;
+    double density;
+  };
+  const Expected particles[] = {{"snow", 300}, {"ice", 900}, {"size_study", 916.7}, {"sand", 2650}};
+  const int wall = table.Find("wall");
+  const int aluminium = table.Find("aluminium");
+  ASSERT_GE(wall, 0);
+  ASSERT_GE(aluminium, 0);
+  for (const auto& p : particles) {
+    SCOPED_TRACE(p.name);
+    const int m = table.Find(p.name);
+    ASSERT_GE(m, 0);
+    EXPECT_EQ(table[m].density, p.density);
+    EXPECT_TRUE(table.has_interaction(m, m));
+    EXPECT_TRUE(table.has_interaction(m, wall));
+    EXPECT_TRUE(table.has_interaction(m, aluminium));
+    // Particle-scoop friction 0.58 except sand (the study's scoop values).
+    if (std::string(p.name) != "sand") {
+      EXPECT_EQ(table.interaction(m, aluminium).friction, 0.58);
+      EXPECT_EQ(table.interaction(m, aluminium).rolling_friction, 0.05);
+      EXPECT_EQ(table.interaction(m, aluminium).restitution, 0.7);
+      EXPECT_EQ(table.interaction(m, m).restitution, 0.88);  // Tables 2 and 6
+      EXPECT_EQ(table[m].shear_modulus, 1.0e7);
+      EXPECT_EQ(table[m].poisson, 0.36);
+    }
+  }
+  // Aluminium: G = E / (2 (1 + nu)) with E 6.9e10 Pa, nu 0.33 (the study's scoop).
+  EXPECT_NEAR(table[aluminium].shear_modulus, 6.9e10 / (2.0 * 1.33), 1e-3 * 2.6e10);
+  EXPECT_NEAR(table[aluminium].YoungsModulus(), 6.9e10, 1e-3 * 6.9e10);
+}
+
+TEST(SceneTest, MissingSceneFileNamesTheFileAsGiven) {
+  try {
+    LoadScene("no/such/scene.yaml");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "no/such/scene.yaml: cannot open scene file");
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// (b) Malformed scenes. Each case edits one line of a valid scene (or its materials file) and
+// names substrings its one-line message must contain.
+
+// Line numbers below refer to these texts.
+const char* kGoodScene =
+    "materials: mats.yaml\n"                                                 // 1
+    "gravity: [0, 0, -1.3]\n"                                                // 2
+    "time_step: {rayleigh_fraction: 0.2}\n"                                  // 3
+    "neighbor: {skin: 0.875e-3}\n"                                           // 4
+    "box: {min: [0, 0, 0], max: [0.05, 0.05, 0.08], wall_material: wall}\n"  // 5
+    "bed:\n"                                                                 // 6
+    "  material: snow\n"                                                     // 7
+    "  radius: 1.75e-3\n"                                                    // 8
+    "  count: 2000\n"                                                        // 9
+    "  seed: 1\n"                                                            // 10
+    "duration: 0.01\n";                                                      // 11
+const char* kGoodMaterials =
+    "materials:\n"                                                                           // 1
+    "  snow: {density: 300, shear_modulus: 1.0e7, poisson: 0.36}\n"                          // 2
+    "  wall: {density: 7850, shear_modulus: 7.9e10, poisson: 0.3}\n"                         // 3
+    "interactions:\n"                                                                        // 4
+    "  - {pair: [snow, snow], restitution: 0.88, friction: 0.58, rolling_friction: 0.05}\n"  // 5
+    "  - {pair: [snow, wall], restitution: 0.7, friction: 0.58, rolling_friction: 0.05}\n";  // 6
+
+struct BadCase {
+  const char* name;        // also the file name: <name>.yaml, materials <name>_mats.yaml
+  const char* scene_from;  // text replaced in the scene ("" = none)
+  const char* scene_to;
+  const char* materials_from;  // text replaced in the materials file ("" = none)
+  const char* materials_to;
+  std::vector<std::string> expect;  // substrings of the message; "@" stands for the file name
+};
+
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  if (from.empty()) return text;
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << "test bug: '" << from << "' not in the text";
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+const BadCase kBadCases[] = {
+    {"unknown_key",
+     "  seed: 1",
+     "  sead: 1",
+     "",
+     "",
+     {"@.yaml:10: bed.sead: expected one of the keys material, radius, count",
+      "got an unknown key 'sead'"}},
+    {"unknown_top_key",
+     "duration: 0.01",
+     "durration: 0.01",
+     "",
+     "",
+     {"@.yaml:11: durration: expected one of the keys", "got an unknown key"}},
+    {"wrong_type",
+     "count: 2000",
+     "count: many",
+     "",
+     "",
+     {"@.yaml:9: bed.count: expected an integer > 0, got many"}},
+    {"wrong_type_gravity",
+     "gravity: [0, 0, -1.3]",
+     "gravity: -1.3",
+     "",
+     "",
+     {"@.yaml:2: gravity: expected a list of 3 numbers [gx, gy, gz] (m/s^2), got -1.3"}},
+    {"gravity_two_components",
+     "gravity: [0, 0, -1.3]",
+     "gravity: [0, -1.3]",
+     "",
+     "",
+     {"@.yaml:2: gravity: expected a list of 3 numbers", "got [0, -1.3]"}},
+    {"missing_gravity",
+     "gravity: [0, 0, -1.3]\n",
+     "",
+     "",
+     "",
+     {"@.yaml:1: gravity: expected a list of 3 numbers", "got nothing (key missing)"}},
+    {"missing_count",
+     "  count: 2000\n",
+     "",
+     "",
+     "",
+     {"@.yaml:7: bed.count: expected an integer > 0, got nothing (key missing)"}},
+    {"negative_radius",
+     "radius: 1.75e-3",
+     "radius: -1.75e-3",
+     "",
+     "",
+     {"@.yaml:8: bed.radius: expected a number > 0 or a range [rmin, rmax]", "got -1.75e-3"}},
+    {"radius_range_reversed",
+     "radius: 1.75e-3",
+     "radius: [2.0e-3, 1.0e-3]",
+     "",
+     "",
+     {"@.yaml:8: bed.radius: expected", "0 < rmin <= rmax", "got [2.0e-3, 1.0e-3]",
+      "range reversed"}},
+    {"negative_count",
+     "count: 2000",
+     "count: -5",
+     "",
+     "",
+     {"@.yaml:9: bed.count: expected an integer > 0, got -5"}},
+    {"bed_does_not_fit",
+     "count: 2000",
+     "count: 200000",
+     "",
+     "",
+     {"@.yaml:9: bed.count: expected a bed that fits the box: at most 5256 spheres", "got 200000",
+      "the settled bed would be 3.04397 m high"}},
+    {"box_smaller_than_a_sphere",
+     "max: [0.05, 0.05, 0.08]",
+     "max: [0.05, 0.002, 0.08]",
+     "",
+     "",
+     {"@.yaml:5: box.max: expected a box at least 0.00400293 m along x, y and z",
+      "got a box of 0.05 x 0.002 x 0.08 m"}},
+    {"restitution_above_one",
+     "",
+     "",
+     "restitution: 0.88",
+     "restitution: 1.3",
+     {"@_mats.yaml:5: interactions[0].restitution: expected a number in (0, 1]", "got 1.3",
+      "pair [snow, snow]"}},
+    {"restitution_zero",
+     "",
+     "",
+     "restitution: 0.88",
+     "restitution: 0",
+     {"@_mats.yaml:5: interactions[0].restitution: expected a number in (0, 1]", "got 0"}},
+    {"negative_friction",
+     "",
+     "",
+     "restitution: 0.7, friction: 0.58",
+     "restitution: 0.7, friction: -0.1",
+     {"@_mats.yaml:6: interactions[1].friction: expected a number >= 0", "got -0.1",
+      "pair [snow, wall]"}},
+    {"negative_rolling_friction",
+     "",
+     "",
+     "rolling_friction: 0.05}",
+     "rolling_friction: -1}",
+     {"@_mats.yaml:5: interactions[0].rolling_friction: expected a number >= 0", "got -1"}},
+    {"poisson_half",
+     "",
+     "",
+     "poisson: 0.36",
+     "poisson: 0.5",
+     {"@_mats.yaml:2: materials.snow.poisson: expected a number in [0, 0.5)", "got 0.5"}},
+    {"zero_density",
+     "",
+     "",
+     "density: 300",
+     "density: 0",
+     {"@_mats.yaml:2: materials.snow.density: expected a number > 0", "got 0"}},
+    {"negative_shear_modulus",
+     "",
+     "",
+     "shear_modulus: 1.0e7",
+     "shear_modulus: -1.0e7",
+     {"@_mats.yaml:2: materials.snow.shear_modulus: expected a number > 0", "got -1.0e7"}},
+    {"unknown_material_key",
+     "",
+     "",
+     "poisson: 0.36}",
+     "poisson: 0.36, colour: white}",
+     {"@_mats.yaml:2: materials.snow.colour: expected one of the keys", "unknown key"}},
+    {"rayleigh_fraction_too_large",
+     "rayleigh_fraction: 0.2",
+     "rayleigh_fraction: 0.5",
+     "",
+     "",
+     {"@.yaml:3: time_step.rayleigh_fraction: expected a number in (0, 0.3], got 0.5",
+      "time step too large", "0.3 t_R"}},
+    {"rayleigh_fraction_zero",
+     "rayleigh_fraction: 0.2",
+     "rayleigh_fraction: 0",
+     "",
+     "",
+     {"@.yaml:3: time_step.rayleigh_fraction: expected a number in (0, 0.3], got 0"}},
+    {"unknown_material",
+     "material: snow",
+     "material: slush",
+     "",
+     "",
+     {"@.yaml:7: bed.material: expected a material defined in", "(snow, wall)", "got slush"}},
+    {"unknown_wall_material",
+     "wall_material: wall",
+     "wall_material: glass",
+     "",
+     "",
+     {"@.yaml:5: box.wall_material: expected a material defined in", "got glass"}},
+    {"yaml_syntax_error",
+     "  seed: 1",
+     "   seed: 1",
+     "",
+     "",
+     {"@.yaml:10: syntax: expected valid YAML, got a syntax error"}},
+    {"yaml_syntax_error_flow",
+     "gravity: [0, 0, -1.3]",
+     "gravity: [0, 0, -1.3",
+     "",
+     "",
+     {"@.yaml:3: syntax: expected valid YAML", "end of sequence flow not found"}},
+    {"box_min_not_below_max",
+     "max: [0.05, 0.05, 0.08]",
+     "max: [0.05, 0.05, 0]",
+     "",
+     "",
+     {"@.yaml:5: box.max: expected every component greater than box.min's", "got [0.05, 0.05, 0]",
+      "z: max 0 <= min 0"}},
+    {"missing_interaction_pair",
+     "",
+     "",
+     "  - {pair: [snow, wall], restitution: 0.7, friction: 0.58, rolling_friction: 0.05}\n",
+     "",
+     {"@.yaml:5: box.wall_material: expected an interaction for the pair [snow, wall]",
+      "got none"}},
+    {"missing_self_interaction",
+     "",
+     "",
+     "  - {pair: [snow, snow], restitution: 0.88, friction: 0.58, rolling_friction: 0.05}\n",
+     "",
+     {"@.yaml:7: bed.material: expected an interaction for the pair [snow, snow]"}},
+    {"interaction_unknown_material",
+     "",
+     "",
+     "pair: [snow, wall]",
+     "pair: [snow, steel]",
+     {"@_mats.yaml:6: interactions[1].pair: expected two material names from materials "
+      "(snow, wall)",
+      "got [snow, steel]"}},
+    {"duplicate_pair",
+     "",
+     "",
+     "pair: [snow, wall]",
+     "pair: [snow, snow]",
+     {"@_mats.yaml:6: interactions[1].pair: expected each pair once, got [snow, snow] again",
+      "first at line 5"}},
+    {"missing_materials_file",
+     "materials: mats.yaml",
+     "materials: nope.yaml",
+     "",
+     "",
+     {"@.yaml:1: materials: expected the path of a readable materials file, got nope.yaml",
+      "cannot open"}},
+    {"duplicate_key",
+     "duration: 0.01",
+     "duration: 0.01\nduration: 0.02",
+     "",
+     "",
+     {"@.yaml:12: duration: expected each key once", "first at line 11"}},
+    {"negative_skin",
+     "skin: 0.875e-3",
+     "skin: -1",
+     "",
+     "",
+     {"@.yaml:4: neighbor.skin: expected a number > 0 (m), got -1"}},
+    {"fill_fraction_zero",
+     "  seed: 1",
+     "  seed: 1\n  fill_fraction: 0",
+     "",
+     "",
+     {"@.yaml:11: bed.fill_fraction: expected a number in (0, 0.5]", "got 0"}},
+    {"negative_duration",
+     "duration: 0.01",
+     "duration: -1",
+     "",
+     "",
+     {"@.yaml:11: duration: expected a number >= 0 (s), got -1"}},
+    {"box_not_a_map",
+     "box: {min: [0, 0, 0], max: [0.05, 0.05, 0.08], wall_material: wall}",
+     "box: 0.05",
+     "",
+     "",
+     {"@.yaml:5: box: expected a map with keys min, max, wall_material, got 0.05"}},
+};
+
+// Names the case in gtest's failure output instead of dumping its bytes.
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
+
+class BadSceneTest : public testing::TestWithParam<BadCase> {};
+
+TEST_P(BadSceneTest, IsRefusedWithOneLineNamingFileLineKeyAndExpectation) {
+  const BadCase& c = GetParam();
+  const std::string name = c.name;
+  const std::string mats_name = name + "_mats.yaml";
+  WriteFile(mats_name, Replace(kGoodMaterials, c.materials_from, c.materials_to));
+  std::string scene_text = Replace(kGoodScene, c.scene_from, c.scene_to);
+  const size_t mats_line = scene_text.find("materials: mats.yaml");
+  if (mats_line != std::string::npos) {
+    scene_text.replace(mats_line, std::string("materials: mats.yaml").size(),
+                       "materials: " + mats_name);
+  }
+  const std::string path = WriteFile(name + ".yaml", scene_text);
+  try {
+    LoadScene(path);
+    FAIL() << "no error for " << name;
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    for (std::string expected : c.expect) {
+      const size_t at = expected.find('@');
+      if (at != std::string::npos) expected.replace(at, 1, name);
+      EXPECT_NE(message.find(expected), std::string::npos)
+          << "message: " << message << "\nmissing: " << expected;
+    }
+    // The file is named exactly as given (the materials file: joined to the scene's folder).
+    const bool in_materials = c.expect[0].rfind("@_mats.yaml:", 0) == 0;
+    const std::string file = in_materials ? (TempDir() / mats_name).string() : path;
+    EXPECT_EQ(message.rfind(file + ":", 0), 0u) << message;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Malformed, BadSceneTest, testing::ValuesIn(kBadCases),
+                         [](const testing::TestParamInfo<BadCase>& info) {
+                           return std::string(info.param.name);
+                         });
+
+TEST(SceneTest, GoodSceneOfTheMalformedTableLoads) {
+  WriteFile("good_mats.yaml", kGoodMaterials);
+  const std::string path = WriteFile(
+      "good.yaml", Replace(kGoodScene, "materials: mats.yaml", "materials: good_mats.yaml"));
+  const Scene scene = LoadScene(path);
+  EXPECT_EQ(scene.bed.count, 2000);
+}
+
+// ---------------------------------------------------------------------------------------------
+// (c) The CLI: bad input -> exit status 2 and one line on stderr.
+
+struct CommandResult {
+  int status = -1;     // exit status, or -1 if it did not exit normally
+  std::string output;  // stdout and stderr together
+};
+
+CommandResult RunCommand(const std::string& arguments) {
+  const std::string command = std::string("'") + SCOOPSIM_BINARY + "' " + arguments + " 2>&1";
+  CommandResult result;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return result;
+  char buffer[4096];
+  size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) result.output.append(buffer, n);
+  const int raw = ::pclose(pipe);
+  if (raw != -1 && WIFEXITED(raw)) result.status = WEXITSTATUS(raw);
+  return result;
+}
+
+int CountLines(const std::string& text) {
+  int lines = 0;
+  for (char c : text) lines += c == '\n';
+  return lines;
+}
+
+TEST(CliTest, BadSceneExitsTwoWithOneLine) {
+  WriteFile("cli_mats.yaml", kGoodMaterials);
+  const std::string scene =
+      WriteFile("cli_bad.yaml",
+                Replace(Replace(kGoodScene, "materials: mats.yaml", "materials: cli_mats.yaml"),
+                        "radius: 1.75e-3", "radius: -1"));
+  const std::string out = (TempDir() / "cli_out" / "run.h5").string();
+  for (const char* command : {"run", "bed"}) {
+    SCOPED_TRACE(command);
+    const CommandResult r =
+        RunCommand(std::string(command) + " '" + scene + "' -o '" + out + "' --quiet");
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_EQ(CountLines(r.output), 1) << r.output;
+    EXPECT_EQ(r.output, "scoopsim: " + scene +
+                            ":8: bed.radius: expected a number > 0 or a range "
+                            "[rmin, rmax] with 0 < rmin <= rmax (m), got -1\n");
+  }
+}
+
+TEST(CliTest, MissingSceneExitsTwoWithOneLine) {
+  const CommandResult r = RunCommand("run no/such/scene.yaml -o /dev/null --quiet");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.output, "scoopsim: no/such/scene.yaml: cannot open scene file\n");
+}
+
+TEST(CliTest, HelpAndVersionExitZero) {
+  const CommandResult help = RunCommand("--help");
+  EXPECT_EQ(help.status, 0) << help.output;
+  EXPECT_NE(help.output.find("bed"), std::string::npos) << help.output;
+  EXPECT_NE(help.output.find("run"), std::string::npos) << help.output;
+  EXPECT_NE(help.output.find("bench"), std::string::npos) << help.output;
+  const CommandResult run_help = RunCommand("run --help");
+  EXPECT_EQ(run_help.status, 0) << run_help.output;
+  EXPECT_NE(run_help.output.find("--threads"), std::string::npos) << run_help.output;
+  const CommandResult version = RunCommand("--version");
+  EXPECT_EQ(version.status, 0) << version.output;
+  EXPECT_NE(version.output.find(SCOOPSIM_VERSION), std::string::npos) << version.output;
+}
+
+TEST(CliTest, CommandLineErrorsExitTwo) {
+  EXPECT_EQ(RunCommand("").status, 2);                   // no subcommand
+  EXPECT_EQ(RunCommand("dig scenes/x.yaml").status, 2);  // unknown subcommand
+  EXPECT_EQ(RunCommand("run").status, 2);                // missing SCENE
+  EXPECT_EQ(RunCommand("run x.yaml --threads -3").status, 2);
+  EXPECT_EQ(RunCommand("bench settle --particles 0").status, 2);
+  EXPECT_EQ(RunCommand("bench settle --bogus").status, 2);
+}
+
+}  // namespace
+}  // namespace sim

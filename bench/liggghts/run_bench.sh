@@ -1,0 +1,197 @@
+#!/bin/bash
+# ---------------------------------------------------------------------------
+# run_bench.sh [BED.h5] -- LIGGGHTS particle-steps/s on the settled bed.
+#
+#   bench/liggghts/run_bench.sh                # LIGGGHTS-made bed (cached)
+#   bench/liggghts/run_bench.sh bed.h5         # scoopsim bed, converted
+#
+# Environment knobs (defaults in brackets):
+#   NRUNS [5]        timed runs per rank count
+#   NSTEPS [2000]    steps per timed run
+#   RANKS ["1 2"]    MPI rank counts to run
+#   MAKE_RANKS [2]   ranks used by in.make_bed
+#   REMAKE_BED [0]   1: rebuild the cached LIGGGHTS bed
+#   MACHINE [hostname]  results go to bench/results/$MACHINE/liggghts_settle.csv
+#   RESULTS_DIR, CACHE_DIR  override bench/results/$MACHINE, bench/cache/liggghts
+#   QUIET_BUSY [0.15]   before each timed run wait until the machine is idle:
+#                       fraction of all CPUs busy (sampled over 2 s) below this
+#   QUIET_WAIT [600]    ...but wait at most this many seconds per run (then run
+#                       anyway; the row is marked "contended")
+#
+# Each row records cpu_busy_before (other load just before the run) and
+# cpu_pct_min (lowest "Percent of CPU this job got" over the ranks, from
+# /usr/bin/time -v).  A run is marked contended when cpu_busy_before >
+# QUIET_BUSY or cpu_pct_min < 90: on a shared 2-core machine such runs are
+# not representative; the summary medians use only uncontended runs when
+# there are any.
+#
+# Output: one JSON line per run and one summary JSON line (medians) per rank
+# count on stdout; CSV in bench/results/$MACHINE/liggghts_settle.csv.
+# Needs: liggghts, mpirun (openmpi-bin), /usr/bin/time (package "time"),
+#        /usr/bin/python3 with h5py + numpy (only to convert an .h5 bed).
+# ---------------------------------------------------------------------------
+set -euo pipefail
+
+HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+ROOT=$(cd "$HERE/../.." && pwd)
+CACHE="${CACHE_DIR:-$ROOT/bench/cache/liggghts}"
+NRUNS=${NRUNS:-5}
+NSTEPS=${NSTEPS:-2000}
+RANKS=${RANKS:-"1 2"}
+MAKE_RANKS=${MAKE_RANKS:-2}
+REMAKE_BED=${REMAKE_BED:-0}
+QUIET_BUSY=${QUIET_BUSY:-0.15}
+QUIET_WAIT=${QUIET_WAIT:-600}
+MACHINE=${MACHINE:-$(hostname -s 2>/dev/null || hostname)}
+RESDIR="${RESULTS_DIR:-$ROOT/bench/results/$MACHINE}"
+CSV="$RESDIR/liggghts_settle.csv"
+PY=/usr/bin/python3
+
+log() { echo "[run_bench] $*" >&2; }
+
+# fraction of all CPUs busy over a 2 s window (from /proc/stat)
+cpu_busy() {
+    local a b
+    a=($(head -1 /proc/stat)); sleep 2; b=($(head -1 /proc/stat))
+    awk -v u1="${a[1]}" -v n1="${a[2]}" -v s1="${a[3]}" -v i1="${a[4]}" -v w1="${a[5]}" \
+        -v q1="${a[6]}" -v sq1="${a[7]}" -v st1="${a[8]}" \
+        -v u2="${b[1]}" -v n2="${b[2]}" -v s2="${b[3]}" -v i2="${b[4]}" -v w2="${b[5]}" \
+        -v q2="${b[6]}" -v sq2="${b[7]}" -v st2="${b[8]}" 'BEGIN{
+        busy=(u2+n2+s2+q2+sq2+st2)-(u1+n1+s1+q1+sq1+st1); idle=(i2+w2)-(i1+w1);
+        tot=busy+idle; printf "%.3f", (tot>0 ? busy/tot : 0) }'
+}
+
+# wait (at most QUIET_WAIT s) until cpu_busy < QUIET_BUSY; prints the last value
+wait_quiet() {
+    local t0 b
+    t0=$(date +%s)
+    while :; do
+        b=$(cpu_busy)
+        if awk -v b="$b" -v q="$QUIET_BUSY" 'BEGIN{exit !(b < q)}'; then break; fi
+        if [ $(( $(date +%s) - t0 )) -ge "$QUIET_WAIT" ]; then
+            log "machine still busy ($b of all CPUs) after ${QUIET_WAIT}s, running anyway"
+            break
+        fi
+        log "machine busy ($b of all CPUs used by other processes), waiting"
+        sleep 8
+    done
+    echo "$b"
+}
+
+command -v liggghts >/dev/null || { log "liggghts not found (apt-get install liggghts)"; exit 1; }
+command -v mpirun   >/dev/null || { log "mpirun not found (apt-get install openmpi-bin)"; exit 1; }
+if [ ! -x /usr/bin/time ]; then
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+        log "/usr/bin/time missing, installing package 'time'"
+        apt-get install -y time >&2
+    else
+        log "/usr/bin/time missing (apt-get install time)"; exit 1
+    fi
+fi
+MPIRUN=(mpirun)
+[ "$(id -u)" = 0 ] && MPIRUN+=(--allow-run-as-root)
+
+mkdir -p "$CACHE" "$RESDIR"
+cd "$HERE"     # in.bench / in.make_bed include in.material and in.walls
+
+# ---------------------------------------------------------------- the bed --
+if [ $# -ge 1 ]; then
+    BED_SRC=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
+    DATA="$CACHE/$(basename "${1%.h5}").data"
+    log "converting $BED_SRC -> $DATA"
+    "$PY" "$HERE/h5_to_liggghts.py" "$BED_SRC" "$DATA" >&2
+    BED_NAME=$(basename "$1")
+else
+    DATA="$CACHE/bed_make_bed.data"
+    BED_NAME="liggghts_make_bed"
+    if [ "$REMAKE_BED" = 1 ] || [ ! -s "$DATA" ]; then
+        log "making the bed with in.make_bed on $MAKE_RANKS ranks (takes minutes)"
+        t0=$(date +%s.%N)
+        "${MPIRUN[@]}" -np "$MAKE_RANKS" liggghts -nocite -in in.make_bed \
+            -var out "$DATA.tmp" -log "$CACHE/make_bed.log" -screen none
+        t1=$(date +%s.%N)
+        mv "$DATA.tmp" "$DATA"
+        MAKE_S=$(awk -v a="$t0" -v b="$t1" 'BEGIN{printf "%.1f", b-a}')
+        echo "$MAKE_S" > "$CACHE/make_bed.wall_s"
+        log "bed made in $MAKE_S s wall: $(grep 'make_bed: done' "$CACHE/make_bed.log" | tail -1)"
+    else
+        log "using cached bed $DATA (made in $(cat "$CACHE/make_bed.wall_s" 2>/dev/null || echo '?') s)"
+    fi
+fi
+
+# ---------------------------------------------------------------- the runs --
+RUNDIR=$(mktemp -d "${TMPDIR:-/tmp}/liggghts_bench.XXXXXX")
+trap 'rm -rf "$RUNDIR"' EXIT
+RAW="$RUNDIR/raw.tsv"
+: > "$RAW"
+
+for R in $RANKS; do
+    for i in $(seq 1 "$NRUNS"); do
+        d="$RUNDIR/r${R}_$i"; mkdir -p "$d"
+        busy=$(wait_quiet)
+        # one /usr/bin/time per rank -> peak RSS of every rank
+        "${MPIRUN[@]}" -np "$R" sh -c \
+            'exec /usr/bin/time -v -o "$0/time.${OMPI_COMM_WORLD_RANK:-0}" liggghts -nocite "$@"' "$d" \
+            -in in.bench -var data "$DATA" -var nsteps "$NSTEPS" \
+            -log "$d/log.liggghts" -screen none
+        line=$(grep -E '^Loop time of .* steps with .* atoms' "$d/log.liggghts" | head -1)
+        [ -n "$line" ] || { log "no 'Loop time' line in $d/log.liggghts"; exit 1; }
+        rss=$(grep -h 'Maximum resident set size' "$d"/time.* | awk '{print $NF}' | tr '\n' ' ')
+        cpp=$(sed -n 's/^in.bench: contacts\/particle \([^,]*\),.*/\1/p' "$d/log.liggghts" | tail -1)
+        pct=$(grep -h 'Percent of CPU this job got' "$d"/time.* | awk '{gsub("%","",$NF); print $NF}' | sort -n | head -1)
+        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$R" "$i" "$line" "$rss" "${cpp:-nan}" "$busy" "${pct:-0}" >> "$RAW"
+        log "ranks=$R run=$i: $line (busy before $busy, min cpu% $pct)"
+    done
+done
+
+CPU_MODEL=$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: *//')
+NCORES=$(nproc)
+"$PY" - "$RAW" "$CSV" "$CPU_MODEL" "$NCORES" "$BED_NAME" "$MACHINE" "$QUIET_BUSY" <<'PYEOF'
+import json, re, statistics, sys, datetime
+raw, csv, cpu, ncores, bed, machine, quiet = sys.argv[1:8]
+quiet = float(quiet)
+pat = re.compile(r"Loop time of (\S+) on (\d+) procs for (\d+) steps with (\d+) atoms")
+rows = []
+for ln in open(raw):
+    r, i, line, rss, cpp, busy, pct = ln.rstrip("\n").split("\t")
+    m = pat.search(line)
+    x, p, n, mm = float(m.group(1)), int(m.group(2)), int(m.group(3)), int(m.group(4))
+    rss_kb = [int(v) for v in rss.split()]
+    row = {"code": "liggghts", "ranks": p, "run": int(i), "particles": mm,
+           "steps": n, "wall_s": round(x, 4),
+           "particle_steps_per_s": round(mm * n / x),
+           "peak_rss_mb": round(max(rss_kb) / 1024.0, 1),          # per rank (max)
+           "peak_rss_total_mb": round(sum(rss_kb) / 1024.0, 1),    # all ranks
+           "contacts_per_particle": float(cpp),
+           "cpu_busy_before": float(busy), "cpu_pct_min": int(float(pct)),
+           "contended": bool(float(busy) > quiet or float(pct) < 90),
+           "bed": bed}
+    rows.append(row)
+    print(json.dumps(row))
+with open(csv, "w") as f:
+    f.write("# LIGGGHTS-PUBLIC 3.8 settled-bed benchmark, bench/liggghts/run_bench.sh\n")
+    f.write("# machine: %s; cpu: %s; cores: %s; date: %s\n"
+            % (machine, cpu, ncores, datetime.datetime.now().isoformat(timespec="seconds")))
+    keys = ["code", "ranks", "run", "particles", "steps", "wall_s",
+            "particle_steps_per_s", "peak_rss_mb", "peak_rss_total_mb",
+            "contacts_per_particle", "cpu_busy_before", "cpu_pct_min",
+            "contended", "bed"]
+    f.write(",".join(keys) + "\n")
+    for row in rows:
+        f.write(",".join(str(row[k]) for k in keys) + "\n")
+for p in sorted({r["ranks"] for r in rows}):
+    allr = [r for r in rows if r["ranks"] == p]
+    rr = [r for r in allr if not r["contended"]] or allr
+    med = lambda k: statistics.median(r[k] for r in rr)
+    print(json.dumps({"code": "liggghts", "summary": "median", "ranks": p,
+                      "runs": len(rr), "runs_contended_excluded": len(allr) - len(rr)
+                      if len(rr) < len(allr) else 0,
+                      "all_contended": all(r["contended"] for r in rr),
+                      "particles": rr[0]["particles"],
+                      "steps": rr[0]["steps"], "wall_s": round(med("wall_s"), 4),
+                      "particle_steps_per_s": round(med("particle_steps_per_s")),
+                      "peak_rss_mb": med("peak_rss_mb"),
+                      "peak_rss_total_mb": med("peak_rss_total_mb"),
+                      "bed": bed, "cpu": cpu}))
+print("[run_bench] wrote %s" % csv, file=sys.stderr)
+PYEOF

@@ -1,0 +1,54 @@
+// Neighbour search: a uniform cell grid that orders particles for memory locality, and a half
+// Verlet list (each pair once, stored with the lower storage index) built from it.
+//
+// Parallel, deterministic force accumulation rests on this layout: particles are sorted by cell
+// with one axis (the "slab" axis, the one with most cells) varying slowest, and the cells are at
+// least one cutoff wide. A pair (i, j > i) then has j in the slab of i or in the next one, so
+// processing even slabs in parallel and then odd slabs never writes one particle from two threads,
+// and the order in which forces add up is fixed by the data alone, whatever the thread count.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "dem/vec3.h"
+
+namespace dem {
+
+class NeighborList {
+ public:
+  // Sets up the grid over [lo, hi] with cells at least `cutoff` wide (the largest pair distance
+  // that must be found: 2 r_max + skin). Caps the cell count near 4 n + 4096 by widening cells.
+  void SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n);
+
+  // Storage order for locality: perm[new_index] = old_index, sorted by cell key (slab axis
+  // slowest) and, within a cell, by the order in which `visit` lists the particles (pass them in
+  // persistent-id order to make the result independent of the previous storage order).
+  void ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit, std::vector<int32_t>* perm);
+
+  // Builds the half list for particles already stored in the order ComputeOrder gave:
+  // pairs (i, j > i) with |x_i - x_j| < r_i + r_j + skin.
+  void Build(const Vec3* x, const double* radius, size_t n, double skin, int num_threads);
+
+  size_t num_pairs() const { return partner.size(); }
+  int num_slabs() const { return static_cast<int>(slab_start.size()) - 1; }
+
+  std::vector<int32_t> start;       // CSR offsets into partner (n + 1)
+  std::vector<int32_t> partner;     // j of each pair (num_pairs)
+  std::vector<int32_t> slab_start;  // particle range of each slab (num_slabs + 1)
+
+ private:
+  int64_t CellKey(const Vec3& x, int c[3]) const;
+
+  Vec3 lo_;
+  double inv_cell_ = 0;
+  int n_[3] = {1, 1, 1};  // cells along (slab axis, second axis, third axis)
+  int axis_[3] = {0, 1, 2};  // world axis of each grid axis
+  std::vector<int64_t> key_;         // cell key of each particle (n), in storage order after sort
+  std::vector<int32_t> cell_start_;  // first particle of each cell (num_cells + 1)
+  std::vector<int32_t> count_;       // scratch (num_cells)
+  std::vector<std::vector<int32_t>> slab_partner_;  // per-slab build buffers
+  std::vector<std::vector<int32_t>> slab_count_;
+};
+
+}  // namespace dem

@@ -1,0 +1,95 @@
+#include "sim/bed.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "dem/insertion.h"
+
+namespace sim {
+
+dem::SystemConfig MakeSystemConfig(const Scene& scene) {
+  dem::SystemConfig c;
+  c.gravity = scene.gravity;
+  c.time_step = scene.time_step;
+  c.skin = scene.skin;
+  const dem::Vec3 lo = scene.box_min, hi = scene.box_max;
+  // The grid covers the box and some head room above its open top.
+  c.domain_min = lo;
+  c.domain_max = hi;
+  const int wall = scene.materials.Find(scene.wall_material);
+  c.planes = {
+      {"floor", lo, {0, 0, 1}, wall},   {"x_min", lo, {1, 0, 0}, wall},
+      {"x_max", hi, {-1, 0, 0}, wall},  {"y_min", lo, {0, 1, 0}, wall},
+      {"y_max", hi, {0, -1, 0}, wall},
+  };
+  return c;
+}
+
+SettleReport Settle(dem::System* system, double mean_ke, double min_time, double max_time,
+                    const SettleObserver& observe, int64_t check_every) {
+  SettleReport r;
+  const double t0 = system->time();
+  const double n = std::max<double>(1.0, static_cast<double>(system->particles().size()));
+  for (;;) {
+    for (int64_t k = 0; k < check_every; ++k) {
+      r.status = system->Step();
+      ++r.steps;
+      if (!r.status.ok()) {
+        r.sim_time = system->time() - t0;
+        return r;
+      }
+    }
+    r.mean_ke = system->KineticEnergy() / n;
+    r.sim_time = system->time() - t0;
+    if (r.mean_ke < mean_ke && r.sim_time >= min_time) {
+      r.settled = true;
+      return r;
+    }
+    if (r.sim_time >= max_time) return r;
+    if (observe && !observe(*system)) return r;
+  }
+}
+
+SettleReport FillAndSettle(const Scene& scene, dem::System* system,
+                           const SettleObserver& observe) {
+  SettleReport total;
+  const BedSpec& bed = scene.bed;
+  const int material = scene.materials.Find(bed.material);
+  dem::Rng rng(bed.seed);
+  int64_t remaining = bed.count;
+  system->Reserve(static_cast<size_t>(bed.count) + system->particles().size());
+  while (remaining > 0) {
+    // Pour into the free part of the box above the present top of the bed.
+    double top = scene.box_min.z;
+    const dem::Particles& p = system->particles();
+    for (size_t i = 0; i < p.size(); ++i) top = std::max(top, p.x[i].z + p.radius[i]);
+    dem::Vec3 lo = scene.box_min, hi = scene.box_max;
+    lo.z = top;
+    const std::vector<dem::SphereSeed> seeds = dem::InsertSpheres(
+        lo, hi, remaining, bed.radius_min, bed.radius_max, bed.fill_fraction, rng);
+    if (seeds.empty()) break;  // box full: the caller reports the shortfall
+    for (const dem::SphereSeed& s : seeds)
+      system->AddParticle(s.x, dem::Vec3{}, dem::Vec3{}, s.radius, material);
+    remaining -= static_cast<int64_t>(seeds.size());
+    ++total.layers;
+    // The layer cannot be at rest before its top has had time to fall to its bottom:
+    // t = sqrt(2 h / g) for the layer's height h.
+    double z_lo = seeds.front().x.z, z_hi = z_lo;
+    for (const dem::SphereSeed& s : seeds) {
+      z_lo = std::min(z_lo, s.x.z);
+      z_hi = std::max(z_hi, s.x.z);
+    }
+    const double g = dem::Norm(scene.gravity);
+    const double t_fall = g > 0 ? std::sqrt(2.0 * (z_hi - z_lo) / g) : 0.0;
+    const SettleReport r = Settle(system, bed.settle_ke, t_fall, bed.settle_max_time, observe);
+    total.steps += r.steps;
+    total.sim_time += r.sim_time;
+    total.mean_ke = r.mean_ke;
+    total.settled = r.settled;
+    total.status = r.status;
+    if (!r.status.ok()) break;
+  }
+  return total;
+}
+
+}  // namespace sim

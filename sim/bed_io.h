@@ -1,0 +1,34 @@
+// Saved beds: the particle state and contact history of a settled bed in one HDF5 file, restored
+// bit for bit, which also opens in ParaView through its XDMF3 sidecar.
+//
+// File layout (all arrays in persistent-id order, SI units):
+//   /                  attributes version, scene_yaml (strings), time [s] (double),
+//                      state_hash (16 hex digits) and state_hash_u64 (System::StateHash())
+//   /snapshots/000000  the same particle snapshot as a run's output (see sim/h5_output.h)
+//   /particles/        id int64 (N), position, velocity, angular_velocity (N x 3), radius (N),
+//                      material int32 (N, index into /materials/names): hard links to the
+//                      snapshot's datasets; force [N], torque [N m] (N x 3): the last step's,
+//                      which velocity Verlet's first half kick uses
+//   /materials/names   material names (string list, index = material id at save time)
+//   /contacts/         a, b int64 (M), shear (M x 3) [m]: System::Contacts(); b < 0 is plane -1-b
+//   <name>.xdmf        sidecar next to <name>.h5
+#pragma once
+
+#include <string>
+
+#include "dem/system.h"
+
+namespace sim {
+
+// Writes `system` to `path` (parent folders created; written to a temporary file and renamed, so
+// an interrupted save never leaves a partial bed). Throws sim::InputError if it cannot be created.
+void SaveBed(const std::string& path, const dem::System& system, const std::string& scene_yaml);
+
+// Appends the saved particles to `system` (AddParticle in saved id order, so a bed loaded into an
+// empty System keeps its ids), restores their last-step force and torque and their contact
+// history (added to the system's existing history), and sets the system's time to the saved time.
+// Materials are matched by name. Throws sim::InputError naming the file and the dataset on a
+// missing file or dataset, a wrong shape or type, or a material the system does not have.
+void LoadBed(const std::string& path, dem::System* system);
+
+}  // namespace sim

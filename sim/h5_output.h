@@ -1,0 +1,87 @@
+// The results file of a run: time series appended row by row, particle snapshots with an XDMF3
+// sidecar for ParaView, and root attributes (scene, version, final state hash).
+//
+// File layout (HDF5, 1.10 format):
+//   /                       attributes scene_yaml, version (strings); state_hash (16 hex digits)
+//                           and state_hash_u64 once set; any SetAttribute() values
+//   /series/...             time series: extendable (n) for width 1, (n x width) otherwise;
+//                           chunks of 1024 rows, shuffle + deflate 4
+//   /snapshots/NNNNNN       attribute time [s]; id int64 (N), position, velocity,
+//                           angular_velocity (N x 3), radius (N), material int32 (N), speed (N),
+//                           connectivity int64 (N) = 0..N-1; all in persistent-id order, SI units
+//   <name>.xdmf             next to <name>.h5: XDMF3 temporal collection of the snapshots
+//
+// Crash safety: the file is written in HDF5's single-writer/multiple-reader (SWMR) mode, so
+// everything up to the last Flush() stays readable even if the process is SIGKILLed (tested).
+// HDF5 1.10 then marks the file as "open for writing": open it with SWMR read
+// (h5py: File(path, "r", swmr=True); C: H5F_ACC_RDONLY | H5F_ACC_SWMR_READ) or clear the mark with
+// `h5clear -s file.h5` (Debian package hdf5-tools) before opening it in ParaView. A clean Close()
+// (also after SIGINT/SIGTERM, see StopRequested) leaves a plain file. Partial chunks at the end of
+// a series are stored unfiltered until they fill up (H5D_CHUNK_DONT_FILTER_PARTIAL_CHUNKS): SWMR
+// never reuses the space of a rewritten chunk, and this bounds that leak to one uncompressed chunk
+// per chunk instead of one per flush.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "dem/system.h"
+
+namespace sim {
+
+class H5Output {
+ public:
+  // Creates (truncates) `path` and its parent folders and writes the root attributes.
+  // Throws sim::InputError naming the path when the file cannot be created.
+  H5Output(const std::string& path, const std::string& scene_yaml, const std::string& version,
+           double flush_seconds = 10.0);
+  ~H5Output();  // Close(); errors are swallowed (call Close() to see them)
+  H5Output(const H5Output&) = delete;
+  H5Output& operator=(const H5Output&) = delete;
+
+  // Appends one row of `width` values to the time series `dataset` ("/series/time"; groups are
+  // created as needed). Rows are buffered and written a chunk at a time. The width of a dataset
+  // is fixed by its first row (std::invalid_argument on a mismatch).
+  void AppendRow(const std::string& dataset, const double* values, int width);
+
+  // Writes /snapshots/NNNNNN (sequential from 000000), flushes the file, then rewrites the XDMF
+  // sidecar, so the sidecar only names data that is on disk.
+  void WriteSnapshot(double time, const dem::Particles& particles);
+
+  void SetStateHash(uint64_t hash);  // root state_hash (hex string) and state_hash_u64
+  void SetAttribute(const std::string& name, double value);
+  void SetAttribute(const std::string& name, const std::string& value);
+
+  // Flush() if at least flush_seconds of wall time have passed since the last flush; returns
+  // whether it flushed. Cheap enough to call every step.
+  bool MaybeFlush();
+  // Writes the buffered rows and flushes the file to disk.
+  void Flush();
+  // Writes everything and closes the file; idempotent. After it the file is complete.
+  void Close();
+
+  void set_flush_seconds(double seconds);
+  double flush_seconds() const;
+  bool is_open() const;
+  const std::string& path() const;
+  std::string xdmf_path() const;
+  int64_t snapshot_count() const;
+  // False when the file system refused SWMR mode and the file was created without it (still
+  // flushed, but then a SIGKILL can corrupt the last flushed chunks).
+  bool swmr() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Graceful stop on SIGINT/SIGTERM: the handler only sets a flag (volatile sig_atomic_t); the run
+// loop polls StopRequested(), closes its output and exits. A second signal of either kind
+// terminates the process at once (default action).
+void InstallStopHandlers();
+bool StopRequested();
+int StopSignal();         // the signal that asked to stop (SIGINT, SIGTERM), 0 if none
+void ClearStopRequest();  // forget a request (tests; a run that handled it and goes on)
+
+}  // namespace sim

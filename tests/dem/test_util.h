@@ -1,0 +1,38 @@
+// Shared helpers for the dem tests: materials from paper Table 6 and small systems.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include "dem/system.h"
+
+namespace dem::test {
+
+// Paper Table 6 snow: G 1e7 Pa, nu 0.36, rho 300 kg/m3.
+inline Material Snow() { return {"snow", 300.0, 1.0e7, 0.36}; }
+// A stiff wall material (steel-like) so that wall contacts differ from particle contacts.
+inline Material Steel() { return {"steel", 7800.0, 7.9e10, 0.3}; }
+
+// A table with snow (0) and steel (1) and the given snow-snow / snow-steel interaction.
+inline MaterialTable SnowAndSteel(const Interaction& snow_snow, const Interaction& snow_steel) {
+  MaterialTable t;
+  t.Add(Snow());
+  t.Add(Steel());
+  t.SetInteraction(0, 0, snow_snow);
+  t.SetInteraction(0, 1, snow_steel);
+  t.SetInteraction(1, 1, snow_steel);
+  return t;
+}
+
+inline Plane Floor(double z = 0.0, int material = 1) {
+  return Plane{"floor", Vec3{0, 0, z}, Vec3{0, 0, 1}, material};
+}
+
+// Steps and fails the test on bad health (STYLE.md habit 11).
+inline void StepOk(System& s, int64_t steps = 1) {
+  for (int64_t k = 0; k < steps; ++k) {
+    const StepStatus st = s.Step();
+    ASSERT_TRUE(st.ok()) << st.message;
+  }
+}
+
+}  // namespace dem::test
