@@ -26,11 +26,13 @@ struct System::Impl {
   double cutoff_radius = 0;    // largest radius the grid was set up for [m]
   size_t grid_capacity = 0;    // particle count the grid was sized for
 
-  // Particle-plane contacts near enough to matter (rebuilt with the list), sorted by particle.
+  // Particle-plane contacts near enough to matter (rebuilt with the list), sorted by particle;
+  // particle i owns entries wall_start[i] .. wall_start[i + 1].
+  std::vector<int32_t> wall_start;  // CSR offsets (N + 1)
   std::vector<int32_t> wall_i;      // particle index
   std::vector<int32_t> wall_k;      // plane index
   std::vector<Vec3> wall_shear;     // tangential history [m]
-  std::vector<Vec3> wall_f, wall_t; // force and torque on the particle this step [N], [N m]
+  std::vector<Vec3> slab_plane_force;  // force on each plane from each slab [N] (slabs x planes)
 
   std::vector<ContactRecord> pending;  // history to apply at the next build
   std::vector<int32_t> perm, visit, index_of_id;
@@ -42,6 +44,7 @@ struct System::Impl {
   // Per-slab reductions of the force pass (fixed slots, so results do not depend on threads).
   std::vector<double> slab_overlap;  // largest overlap / smaller diameter
   std::vector<int64_t> slab_contacts;
+  std::vector<int64_t> slab_wall_contacts;
   int64_t contacts = 0, wall_contacts = 0;
   double max_overlap = 0;
 };
@@ -232,7 +235,9 @@ void System::Rebuild() {
   m.shear.assign(m.list.num_pairs(), Vec3{});
   m.wall_i.clear();
   m.wall_k.clear();
-  for (size_t i = 0; i < n; ++i)
+  m.wall_start.resize(n + 1);
+  for (size_t i = 0; i < n; ++i) {
+    m.wall_start[i] = static_cast<int32_t>(m.wall_i.size());
     for (size_t k = 0; k < config_.planes.size(); ++k) {
       const Plane& pl = config_.planes[k];
       if (Dot(p_.x[i] - pl.point, pl.normal) < p_.radius[i] + m.skin) {
@@ -240,9 +245,9 @@ void System::Rebuild() {
         m.wall_k.push_back(static_cast<int32_t>(k));
       }
     }
+  }
+  m.wall_start[n] = static_cast<int32_t>(m.wall_i.size());
   m.wall_shear.assign(m.wall_i.size(), Vec3{});
-  m.wall_f.resize(m.wall_i.size());
-  m.wall_t.resize(m.wall_i.size());
 
   // 4. Put the kept history back on the new entries (sign flips if the pair's owner changed).
   for (const ContactRecord& c : m.pending) {
@@ -260,11 +265,8 @@ void System::Rebuild() {
         }
     } else {
       const int32_t plane = static_cast<int32_t>(-1 - c.b);
-      auto it = std::lower_bound(m.wall_i.begin(), m.wall_i.end(), ia);
-      for (; it != m.wall_i.end() && *it == ia; ++it) {
-        const size_t e = it - m.wall_i.begin();
+      for (int32_t e = m.wall_start[ia]; e < m.wall_start[ia + 1]; ++e)
         if (m.wall_k[e] == plane) m.wall_shear[e] = c.shear;
-      }
     }
   }
   m.pending.clear();
@@ -281,8 +283,11 @@ void System::ComputeForces() {
   const Vec3 g = config_.gravity;
   const int nm = materials_.size();
   const int nslabs = m.list.num_slabs();
+  const int np = static_cast<int>(config_.planes.size());
   m.slab_overlap.assign(nslabs, 0.0);
   m.slab_contacts.assign(nslabs, 0);
+  m.slab_wall_contacts.assign(nslabs, 0);
+  m.slab_plane_force.assign(static_cast<size_t>(nslabs) * np, Vec3{});
 
   Vec3* __restrict f = p_.f.data();
   Vec3* __restrict t = p_.t.data();
@@ -297,6 +302,10 @@ void System::ComputeForces() {
   const int32_t* partner = m.list.partner.data();
   Vec3* shear = m.shear.data();
   const PairConstants* pc = m.pair.data();
+  const int32_t* wall_start = m.wall_start.data();
+  const int32_t* wall_k = m.wall_k.data();
+  Vec3* wall_shear = m.wall_shear.data();
+  const Plane* planes = config_.planes.data();
 
 #pragma omp parallel num_threads(num_threads_)
   {
@@ -305,18 +314,19 @@ void System::ComputeForces() {
       f[i] = mass[i] * g;
       t[i] = Vec3{};
     }
-    // Particle pairs: even slabs, then odd slabs (see neighbor.h for why this is race-free and
-    // deterministic).
+    // Even slabs, then odd slabs (see neighbor.h for why this is race-free and deterministic).
     for (int phase = 0; phase < 2; ++phase) {
 #pragma omp for schedule(dynamic, 1)
       for (int s = phase; s < nslabs; s += 2) {
         double worst = 0;
-        int64_t touching = 0;
+        int64_t touching = 0, wall_touching = 0;
+        Vec3* plane_force = m.slab_plane_force.data() + static_cast<size_t>(s) * np;
         for (int32_t i = m.list.slab_start[s]; i < m.list.slab_start[s + 1]; ++i) {
           const Vec3 xi = x[i], vi = v[i], wi = w[i];
           const double ri = radius[i], mi = mass[i], inv_ii = inv_inertia[i];
           const PairConstants* pci = pc + mat[i] * nm;
           Vec3 fi, ti;
+          // Particle pairs (i, j > i).
           for (int32_t k = start[i]; k < start[i + 1]; ++k) {
             const int32_t j = partner[k];
             const Vec3 d = x[j] - xi;
@@ -324,7 +334,7 @@ void System::ComputeForces() {
             const double rsum = ri + rj;
             const double d2 = Norm2(d);
             if (d2 >= rsum * rsum) {
-              shear[k] = Vec3{};
+              if (shear[k].x != 0.0 || shear[k].y != 0.0 || shear[k].z != 0.0) shear[k] = Vec3{};
               continue;
             }
             const double dist = std::sqrt(d2);
@@ -346,53 +356,42 @@ void System::ComputeForces() {
             worst = std::max(worst, delta / (2.0 * std::min(ri, rj)));
             ++touching;
           }
+          // Particle-plane contacts of i (R* = r_i, m* = m_i: the wall is rigid and fixed).
+          for (int32_t e = wall_start[i]; e < wall_start[i + 1]; ++e) {
+            const Plane& pl = planes[wall_k[e]];
+            const double delta = ri - Dot(xi - pl.point, pl.normal);
+            if (delta <= 0.0) {
+              wall_shear[e] = Vec3{};
+              continue;
+            }
+            const Vec3 nrm = -pl.normal;  // from the particle to the wall
+            const Vec3 v_rel = -(vi + ri * Cross(wi, nrm));
+            const ContactForce cf = EvaluateContact(m.wall[mat[i] * np + wall_k[e]], nrm, delta,
+                                                    ri, mi, v_rel, wi, inv_ii, dt, wall_shear[e]);
+            const Vec3 fa = cf.ft - cf.fn * nrm;
+            fi += fa;
+            ti += ri * Cross(nrm, cf.ft) + cf.mr;
+            plane_force[wall_k[e]] -= fa;
+            worst = std::max(worst, delta / (2.0 * ri));
+            ++wall_touching;
+          }
           f[i] += fi;
           t[i] += ti;
         }
         m.slab_overlap[s] = worst;
         m.slab_contacts[s] = touching;
+        m.slab_wall_contacts[s] = wall_touching;
       }
-    }
-    // Particle-plane contacts: forces per entry in parallel, summed serially below.
-    const size_t ne = m.wall_i.size();
-    const int np = static_cast<int>(config_.planes.size());
-#pragma omp for schedule(static)
-    for (size_t e = 0; e < ne; ++e) {
-      const int32_t i = m.wall_i[e];
-      const Plane& pl = config_.planes[m.wall_k[e]];
-      const double ri = radius[i];
-      const double delta = ri - Dot(x[i] - pl.point, pl.normal);
-      if (delta <= 0.0) {
-        m.wall_shear[e] = Vec3{};
-        m.wall_f[e] = Vec3{};
-        m.wall_t[e] = Vec3{};
-        continue;
-      }
-      const Vec3 nrm = -pl.normal;  // from the particle to the wall
-      const Vec3 v_rel = -(v[i] + ri * Cross(w[i], nrm));
-      const ContactForce cf =
-          EvaluateContact(m.wall[mat[i] * np + m.wall_k[e]], nrm, delta, ri, mass[i], v_rel,
-                          w[i], inv_inertia[i], dt, m.wall_shear[e]);
-      m.wall_f[e] = cf.ft - cf.fn * nrm;
-      m.wall_t[e] = ri * Cross(nrm, cf.ft) + cf.mr;
     }
   }
+  // Reductions over slabs in slab order (independent of the thread count).
   std::fill(plane_force_.begin(), plane_force_.end(), Vec3{});
-  m.wall_contacts = 0;
+  m.contacts = m.wall_contacts = 0;
   double worst = 0;
-  for (size_t e = 0; e < m.wall_i.size(); ++e) {
-    const int32_t i = m.wall_i[e];
-    if (Norm2(m.wall_f[e]) == 0.0 && Norm2(m.wall_t[e]) == 0.0) continue;
-    f[i] += m.wall_f[e];
-    t[i] += m.wall_t[e];
-    plane_force_[m.wall_k[e]] -= m.wall_f[e];
-    ++m.wall_contacts;
-    const Plane& pl = config_.planes[m.wall_k[e]];
-    worst = std::max(worst, (radius[i] - Dot(x[i] - pl.point, pl.normal)) / (2.0 * radius[i]));
-  }
-  m.contacts = 0;
   for (int s = 0; s < nslabs; ++s) {
+    for (int k = 0; k < np; ++k) plane_force_[k] += m.slab_plane_force[static_cast<size_t>(s) * np + k];
     m.contacts += m.slab_contacts[s];
+    m.wall_contacts += m.slab_wall_contacts[s];
     worst = std::max(worst, m.slab_overlap[s]);
   }
   m.max_overlap = worst;

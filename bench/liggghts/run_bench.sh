@@ -15,7 +15,7 @@
 #   RESULTS_DIR, CACHE_DIR  override bench/results/$MACHINE, bench/cache/liggghts
 #   QUIET_BUSY [0.15]   before each timed run wait until the machine is idle:
 #                       fraction of all CPUs busy (sampled over 2 s) below this
-#   QUIET_WAIT [600]    ...but wait at most this many seconds per run (then run
+#   QUIET_WAIT [300]    ...but wait at most this many seconds per run (then run
 #                       anyway; the row is marked "contended")
 #
 # Each row records cpu_busy_before (other load just before the run) and
@@ -41,7 +41,7 @@ RANKS=${RANKS:-"1 2"}
 MAKE_RANKS=${MAKE_RANKS:-2}
 REMAKE_BED=${REMAKE_BED:-0}
 QUIET_BUSY=${QUIET_BUSY:-0.15}
-QUIET_WAIT=${QUIET_WAIT:-600}
+QUIET_WAIT=${QUIET_WAIT:-300}
 MACHINE=${MACHINE:-$(hostname -s 2>/dev/null || hostname)}
 RESDIR="${RESULTS_DIR:-$ROOT/bench/results/$MACHINE}"
 CSV="$RESDIR/liggghts_settle.csv"
@@ -145,6 +145,7 @@ for R in $RANKS; do
 done
 
 CPU_MODEL=$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: *//')
+CPU_MODEL="$CPU_MODEL (family $(grep -m1 'cpu family' /proc/cpuinfo | sed 's/.*: *//') model $(grep -m1 '^model[[:space:]]*:' /proc/cpuinfo | sed 's/.*: *//'))"
 NCORES=$(nproc)
 "$PY" - "$RAW" "$CSV" "$CPU_MODEL" "$NCORES" "$BED_NAME" "$MACHINE" "$QUIET_BUSY" <<'PYEOF'
 import json, re, statistics, sys, datetime
@@ -178,7 +179,8 @@ with open(csv, "w") as f:
             "contended", "bed"]
     f.write(",".join(keys) + "\n")
     for row in rows:
-        f.write(",".join(str(row[k]) for k in keys) + "\n")
+        f.write(",".join(str(row[k]).lower() if isinstance(row[k], bool)
+                         else str(row[k]) for k in keys) + "\n")
 for p in sorted({r["ranks"] for r in rows}):
     allr = [r for r in rows if r["ranks"] == p]
     rr = [r for r in allr if not r["contended"]] or allr
@@ -190,8 +192,8 @@ for p in sorted({r["ranks"] for r in rows}):
                       "particles": rr[0]["particles"],
                       "steps": rr[0]["steps"], "wall_s": round(med("wall_s"), 4),
                       "particle_steps_per_s": round(med("particle_steps_per_s")),
-                      "peak_rss_mb": med("peak_rss_mb"),
-                      "peak_rss_total_mb": med("peak_rss_total_mb"),
+                      "peak_rss_mb": round(med("peak_rss_mb"), 1),
+                      "peak_rss_total_mb": round(med("peak_rss_total_mb"), 1),
                       "bed": bed, "cpu": cpu}))
 print("[run_bench] wrote %s" % csv, file=sys.stderr)
 PYEOF
