@@ -278,9 +278,7 @@ void System::Rebuild() {
 
 void System::ComputeForces() {
   Impl& m = *impl_;
-  const size_t n = p_.size();
   const double dt = config_.time_step;
-  const Vec3 g = config_.gravity;
   const int nm = materials_.size();
   const int nslabs = m.list.num_slabs();
   const int np = static_cast<int>(config_.planes.size());
@@ -309,11 +307,6 @@ void System::ComputeForces() {
 
 #pragma omp parallel num_threads(num_threads_)
   {
-#pragma omp for schedule(static)
-    for (size_t i = 0; i < n; ++i) {
-      f[i] = mass[i] * g;
-      t[i] = Vec3{};
-    }
     // Even slabs, then odd slabs (see neighbor.h for why this is race-free and deterministic).
     for (int phase = 0; phase < 2; ++phase) {
 #pragma omp for schedule(dynamic, 1)
@@ -405,10 +398,12 @@ StepStatus System::Step() {
   Vec3* x = p_.x.data();
   Vec3* v = p_.v.data();
   Vec3* w = p_.w.data();
-  const Vec3* f = p_.f.data();
-  const Vec3* t = p_.t.data();
+  Vec3* f = p_.f.data();
+  Vec3* t = p_.t.data();
+  const double* mass = p_.mass.data();
   const double* inv_mass = p_.inv_mass.data();
   const double* inv_inertia = p_.inv_inertia.data();
+  const Vec3 g = config_.gravity;
 
   // Velocity Verlet (LIGGGHTS fix nve/sphere; Allen & Tildesley eq. 3.19): half kick, drift.
   double max_disp2 = 0;
@@ -420,6 +415,9 @@ StepStatus System::Step() {
     w[i] += (h * inv_inertia[i]) * t[i];
     x[i] += dt * v[i];
     if (have_build) max_disp2 = std::max(max_disp2, Norm2(x[i] - xb[i]));
+    // Start this step's force with gravity (contacts add to it in ComputeForces).
+    f[i] = mass[i] * g;
+    t[i] = Vec3{};
   }
   const double half_skin = 0.5 * m.skin;
   if (m.needs_rebuild || !have_build || max_disp2 > half_skin * half_skin) Rebuild();
