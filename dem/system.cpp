@@ -13,26 +13,63 @@
 
 namespace dem {
 
+// Contacts gathered before one vectorised force evaluation (a block of particles' worth).
+constexpr size_t kBatchContacts = 256;
+
+// Per-thread scratch of the force pass: the particle-pair contacts of a block of particles,
+// gathered so their forces can be computed in one vectorised loop (structure of arrays).
+struct System::ContactBatch {
+  // Inputs, gathered by the scalar pass (structure of arrays, one entry per touching pair).
+  std::vector<int32_t> i, j, k;        // owner, partner, list entry
+  std::vector<double> dx, dy, dz;      // x_j - x_i [m]
+  std::vector<double> dvx, dvy, dvz;   // v_j - v_i [m/s]
+  std::vector<double> ax, ay, az;      // r_i w_i + r_j w_j [m/s]
+  std::vector<double> wx, wy, wz;      // w_i - w_j [rad/s]
+  std::vector<double> ri, rj, m_star;  // radii [m], reduced mass [kg]
+  std::vector<double> inv_inertia;     // 1/I_i + 1/I_j [1/(kg m^2)]
+  std::vector<double> e_star, g_star, damp, tangential_ratio, friction, rolling;  // PairConstants
+  std::vector<double> sx, sy, sz;  // tangential history in, then out [m]
+  // Outputs.
+  std::vector<double> fx, fy, fz;     // force on i [N]
+  std::vector<double> tix, tiy, tiz;  // torque on i [N m]
+  std::vector<double> tjx, tjy, tjz;  // torque on j [N m]
+  std::vector<double> overlap;        // delta / smaller diameter
+  void Resize(size_t n) {
+    for (auto* a : {&i, &j, &k}) a->resize(n);
+    for (auto* a : {&dx,          &dy,      &dz,     &dvx,  &dvy,
+                    &dvz,         &ax,      &ay,     &az,   &wx,
+                    &wy,          &wz,      &ri,     &rj,   &m_star,
+                    &inv_inertia, &e_star,  &g_star, &damp, &tangential_ratio,
+                    &friction,    &rolling, &sx,     &sy,   &sz,
+                    &fx,          &fy,      &fz,     &tix,  &tiy,
+                    &tiz,         &tjx,     &tjy,    &tjz,  &overlap})
+      a->resize(n);
+  }
+};
+
 // Private state of the System: contact constants, neighbour list, contact history.
 struct System::Impl {
   std::vector<PairConstants> pair;  // material pair constants (nm x nm)
   std::vector<PairConstants> wall;  // particle material x plane (nm x num_planes)
   NeighborList list;
-  bool list_valid = false;     // list indices refer to the current storage
+  bool list_valid = false;  // list indices refer to the current storage
   bool needs_rebuild = true;
-  std::vector<Vec3> shear;     // tangential history of each list pair [m] (num_pairs)
-  std::vector<Vec3> x_build;   // positions at the last build [m] (N)
+  std::vector<Vec3> shear;    // tangential history of each list pair [m] (num_pairs)
+  std::vector<Vec3> x_build;  // positions at the last build [m] (N)
   double skin = 0;
-  double cutoff_radius = 0;    // largest radius the grid was set up for [m]
-  size_t grid_capacity = 0;    // particle count the grid was sized for
+  double cutoff_radius = 0;  // largest radius the grid was set up for [m]
+  size_t grid_capacity = 0;  // particle count the grid was sized for
 
   // Particle-plane contacts near enough to matter (rebuilt with the list), sorted by particle;
   // particle i owns entries wall_start[i] .. wall_start[i + 1].
-  std::vector<int32_t> wall_start;  // CSR offsets (N + 1)
-  std::vector<int32_t> wall_i;      // particle index
-  std::vector<int32_t> wall_k;      // plane index
-  std::vector<Vec3> wall_shear;     // tangential history [m]
+  std::vector<int32_t> wall_start;     // CSR offsets (N + 1)
+  std::vector<int32_t> wall_i;         // particle index
+  std::vector<int32_t> wall_k;         // plane index
+  std::vector<Vec3> wall_shear;        // tangential history [m]
   std::vector<Vec3> slab_plane_force;  // force on each plane from each slab [N] (slabs x planes)
+
+  std::vector<ContactBatch> batches;  // one per thread
+  size_t batch_capacity = 0;
 
   std::vector<ContactRecord> pending;  // history to apply at the next build
   std::vector<int32_t> perm, visit, index_of_id;
@@ -178,8 +215,8 @@ std::vector<ContactRecord> System::Contacts() const {
           out.push_back({p_.id[i], p_.id[m.list.partner[k]], m.shear[k]});
     for (size_t e = 0; e < m.wall_i.size(); ++e)
       if (Norm2(m.wall_shear[e]) > 0.0)
-        out.push_back({p_.id[m.wall_i[e]], -1 - static_cast<int64_t>(m.wall_k[e]),
-                       m.wall_shear[e]});
+        out.push_back(
+            {p_.id[m.wall_i[e]], -1 - static_cast<int64_t>(m.wall_k[e]), m.wall_shear[e]});
   }
   out.insert(out.end(), m.pending.begin(), m.pending.end());
   std::sort(out.begin(), out.end(), [](const ContactRecord& l, const ContactRecord& r) {
@@ -233,6 +270,9 @@ void System::Rebuild() {
   // 3. Particle pairs and particle-plane candidates within reach (+ skin).
   m.list.Build(p_.x.data(), p_.radius.data(), n, m.skin, num_threads_);
   m.shear.assign(m.list.num_pairs(), Vec3{});
+  int32_t longest = 0;
+  for (size_t i = 0; i < n; ++i) longest = std::max(longest, m.list.start[i + 1] - m.list.start[i]);
+  m.batch_capacity = std::max<size_t>(kBatchContacts, 2 * static_cast<size_t>(longest));
   m.wall_i.clear();
   m.wall_k.clear();
   m.wall_start.resize(n + 1);
@@ -276,10 +316,88 @@ void System::Rebuild() {
   ++builds_;
 }
 
+// Hertz-Mindlin forces of a batch of particle pairs: the same law as EvaluateContact
+// (dem/contact.h), written without branches so that the compiler runs one contact per SIMD lane.
+void System::PairForces(ContactBatch& b, size_t nb) {
+  const double dt = config_.time_step;
+  ContactBatch& __restrict c = b;
+  const int n = static_cast<int>(nb);
+#pragma omp simd
+  for (int e = 0; e < n; ++e) {
+    const double dx = c.dx[e], dy = c.dy[e], dz = c.dz[e];
+    const double ri = c.ri[e], rj = c.rj[e];
+    const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double inv_d = 1.0 / dist;
+    const double nx = dx * inv_d, ny = dy * inv_d, nz = dz * inv_d;  // from i to j
+    const double delta = ri + rj - dist;
+    const double r_star = ri * rj / (ri + rj);
+    // Contact-point velocity of j relative to i: (v_j - v_i) - (r_i w_i + r_j w_j) x n.
+    const double ax = c.ax[e], ay = c.ay[e], az = c.az[e];
+    const double vx = c.dvx[e] - (ay * nz - az * ny);
+    const double vy = c.dvy[e] - (az * nx - ax * nz);
+    const double vz = c.dvz[e] - (ax * ny - ay * nx);
+    const double vn = vx * nx + vy * ny + vz * nz;
+    const double vtx = vx - vn * nx, vty = vy - vn * ny, vtz = vz - vn * nz;
+    // Normal: Hertz spring + damping, no tension.
+    const double sq = std::sqrt(r_star * delta);
+    const double sn = 2.0 * c.e_star[e] * sq;
+    const double gamma_n = c.damp[e] * std::sqrt(sn * c.m_star[e]);
+    const double fn = std::max(0.0, 2.0 / 3.0 * sn * delta - gamma_n * vn);
+    // Tangential history: back into the tangent plane at its old length, plus v_t dt.
+    double sx = c.sx[e], sy = c.sy[e], sz = c.sz[e];
+    const double xi_n = sx * nx + sy * ny + sz * nz;
+    sx -= xi_n * nx;
+    sy -= xi_n * ny;
+    sz -= xi_n * nz;
+    const double new2 = sx * sx + sy * sy + sz * sz;
+    const double q = new2 > 0.0 ? xi_n * xi_n / new2 : 0.0;
+    const double scale = q < 1e-4 ? 1.0 + q * (0.5 - 0.125 * q) : std::sqrt(1.0 + q);
+    sx = sx * scale + dt * vtx;
+    sy = sy * scale + dt * vty;
+    sz = sz * scale + dt * vtz;
+    // Mindlin spring + damping, Coulomb cap (the spring then carries the friction force).
+    const double st = 4.0 * c.g_star[e] / c.e_star[e] * sn;
+    const double gamma_t = c.tangential_ratio[e] * gamma_n;
+    double ftx = st * sx + gamma_t * vtx, fty = st * sy + gamma_t * vty,
+           ftz = st * sz + gamma_t * vtz;
+    const double ft2 = ftx * ftx + fty * fty + ftz * ftz;
+    const double cap = c.friction[e] * fn;
+    const bool slide = ft2 > cap * cap;
+    const double ratio = slide ? cap / std::sqrt(ft2) : 1.0;
+    ftx *= ratio;
+    fty *= ratio;
+    ftz *= ratio;
+    const double inv_st = 1.0 / st;
+    c.sx[e] = slide ? ftx * inv_st : sx;
+    c.sy[e] = slide ? fty * inv_st : sy;
+    c.sz[e] = slide ? ftz * inv_st : sz;
+    // Rolling friction against the relative rotation, limited so it cannot reverse it.
+    const double wrx = c.wx[e], wry = c.wy[e], wrz = c.wz[e];
+    const double w2 = wrx * wrx + wry * wry + wrz * wrz;
+    const double wn = std::sqrt(w2);
+    const double mr_mag = std::min(c.rolling[e] * r_star * fn, wn / (dt * c.inv_inertia[e]));
+    const double mr_f = (c.rolling[e] > 0.0 && w2 > 0.0) ? -mr_mag / wn : 0.0;
+    const double mrx = mr_f * wrx, mry = mr_f * wry, mrz = mr_f * wrz;
+    // Force on i and the torques on both.
+    c.fx[e] = ftx - fn * nx;
+    c.fy[e] = fty - fn * ny;
+    c.fz[e] = ftz - fn * nz;
+    const double cx = ny * ftz - nz * fty, cy = nz * ftx - nx * ftz, cz = nx * fty - ny * ftx;
+    c.tix[e] = ri * cx + mrx;
+    c.tiy[e] = ri * cy + mry;
+    c.tiz[e] = ri * cz + mrz;
+    c.tjx[e] = rj * cx - mrx;
+    c.tjy[e] = rj * cy - mry;
+    c.tjz[e] = rj * cz - mrz;
+    c.overlap[e] = delta / (2.0 * std::min(ri, rj));
+  }
+}
+
 void System::ComputeForces() {
   Impl& m = *impl_;
   const double dt = config_.time_step;
   const int nm = materials_.size();
+  const PairConstants* pc = m.pair.data();
   const int nslabs = m.list.num_slabs();
   const int np = static_cast<int>(config_.planes.size());
   m.slab_overlap.assign(nslabs, 0.0);
@@ -299,11 +417,14 @@ void System::ComputeForces() {
   const int32_t* start = m.list.start.data();
   const int32_t* partner = m.list.partner.data();
   Vec3* shear = m.shear.data();
-  const PairConstants* pc = m.pair.data();
   const int32_t* wall_start = m.wall_start.data();
   const int32_t* wall_k = m.wall_k.data();
   Vec3* wall_shear = m.wall_shear.data();
   const Plane* planes = config_.planes.data();
+
+  if (m.batches.size() < static_cast<size_t>(num_threads_)) m.batches.resize(num_threads_);
+  for (ContactBatch& b : m.batches)
+    if (b.i.size() < m.batch_capacity) b.Resize(m.batch_capacity);
 
 #pragma omp parallel num_threads(num_threads_)
   {
@@ -314,62 +435,106 @@ void System::ComputeForces() {
         double worst = 0;
         int64_t touching = 0, wall_touching = 0;
         Vec3* plane_force = m.slab_plane_force.data() + static_cast<size_t>(s) * np;
-        for (int32_t i = m.list.slab_start[s]; i < m.list.slab_start[s + 1]; ++i) {
-          const Vec3 xi = x[i], vi = v[i], wi = w[i];
-          const double ri = radius[i], mi = mass[i], inv_ii = inv_inertia[i];
-          const PairConstants* pci = pc + mat[i] * nm;
-          Vec3 fi, ti;
-          // Particle pairs (i, j > i).
-          for (int32_t k = start[i]; k < start[i + 1]; ++k) {
-            const int32_t j = partner[k];
-            const Vec3 d = x[j] - xi;
-            const double rj = radius[j];
-            const double rsum = ri + rj;
-            const double d2 = Norm2(d);
-            if (d2 >= rsum * rsum) {
-              if (shear[k].x != 0.0 || shear[k].y != 0.0 || shear[k].z != 0.0) shear[k] = Vec3{};
-              continue;
+        ContactBatch& batch = m.batches[omp_get_thread_num()];
+        const int32_t slab_end = m.list.slab_start[s + 1];
+        int32_t block = m.list.slab_start[s];
+        while (block < slab_end) {
+          // 1. Gather the touching pairs of a block of particles (scalar, cheap); pairs that
+          //    are apart lose their tangential history.
+          size_t nb = 0;
+          int32_t block_end = block;
+          for (; block_end < slab_end; ++block_end) {
+            const int32_t i = block_end;
+            if (nb + static_cast<size_t>(start[i + 1] - start[i]) > m.batch_capacity) break;
+            const Vec3 xi = x[i], vi = v[i], wi = w[i];
+            const double ri = radius[i], mi = mass[i], inv_ii = inv_inertia[i];
+            const PairConstants* pci = pc + mat[i] * nm;
+            for (int32_t k = start[i]; k < start[i + 1]; ++k) {
+              const int32_t j = partner[k];
+              const double rsum = ri + radius[j];
+              const Vec3 d = x[j] - xi;
+              if (Norm2(d) < rsum * rsum) {
+                const PairConstants& pcij = pci[mat[j]];
+                batch.i[nb] = i;
+                batch.j[nb] = j;
+                batch.k[nb] = k;
+                batch.dx[nb] = d.x;
+                batch.dy[nb] = d.y;
+                batch.dz[nb] = d.z;
+                const Vec3 dv = v[j] - vi;
+                batch.dvx[nb] = dv.x;
+                batch.dvy[nb] = dv.y;
+                batch.dvz[nb] = dv.z;
+                const Vec3 a = ri * wi + radius[j] * w[j];
+                batch.ax[nb] = a.x;
+                batch.ay[nb] = a.y;
+                batch.az[nb] = a.z;
+                const Vec3 wr = wi - w[j];
+                batch.wx[nb] = wr.x;
+                batch.wy[nb] = wr.y;
+                batch.wz[nb] = wr.z;
+                batch.ri[nb] = ri;
+                batch.rj[nb] = radius[j];
+                batch.m_star[nb] = mi * mass[j] / (mi + mass[j]);
+                batch.inv_inertia[nb] = inv_ii + inv_inertia[j];
+                batch.e_star[nb] = pcij.e_star;
+                batch.g_star[nb] = pcij.g_star;
+                batch.damp[nb] = pcij.damp;
+                batch.tangential_ratio[nb] = pcij.tangential_ratio;
+                batch.friction[nb] = pcij.friction;
+                batch.rolling[nb] = pcij.rolling_friction;
+                batch.sx[nb] = shear[k].x;
+                batch.sy[nb] = shear[k].y;
+                batch.sz[nb] = shear[k].z;
+                ++nb;
+              } else if (shear[k].x != 0.0 || shear[k].y != 0.0 || shear[k].z != 0.0) {
+                shear[k] = Vec3{};
+              }
             }
-            const double dist = std::sqrt(d2);
-            const double delta = rsum - dist;
-            const Vec3 nrm = (1.0 / dist) * d;
-            const double mj = mass[j];
-            const double r_star = ri * rj / rsum;
-            const double m_star = mi * mj / (mi + mj);
-            const Vec3 v_rel = (v[j] - vi) - rj * Cross(w[j], nrm) - ri * Cross(wi, nrm);
-            const ContactForce cf =
-                EvaluateContact(pci[mat[j]], nrm, delta, r_star, m_star, v_rel, wi - w[j],
-                                inv_ii + inv_inertia[j], dt, shear[k]);
-            const Vec3 fa = cf.ft - cf.fn * nrm;  // force on i
-            const Vec3 nxf = Cross(nrm, cf.ft);
-            fi += fa;
-            ti += ri * nxf + cf.mr;
+          }
+          // 2. Contact forces of the batch, one contact per SIMD lane (EvaluateContact, written
+          //    without branches).
+          PairForces(batch, nb);
+          // 3. Accumulate in batch order (fixed by the data: deterministic), then the walls.
+          for (size_t b = 0; b < nb; ++b) {
+            const int32_t i = batch.i[b], j = batch.j[b];
+            shear[batch.k[b]] = Vec3{batch.sx[b], batch.sy[b], batch.sz[b]};
+            const Vec3 fa{batch.fx[b], batch.fy[b], batch.fz[b]};
+            f[i] += fa;
             f[j] -= fa;
-            t[j] += rj * nxf - cf.mr;
-            worst = std::max(worst, delta / (2.0 * std::min(ri, rj)));
-            ++touching;
+            t[i] += Vec3{batch.tix[b], batch.tiy[b], batch.tiz[b]};
+            t[j] += Vec3{batch.tjx[b], batch.tjy[b], batch.tjz[b]};
+            worst = std::max(worst, batch.overlap[b]);
           }
-          // Particle-plane contacts of i (R* = r_i, m* = m_i: the wall is rigid and fixed).
-          for (int32_t e = wall_start[i]; e < wall_start[i + 1]; ++e) {
-            const Plane& pl = planes[wall_k[e]];
-            const double delta = ri - Dot(xi - pl.point, pl.normal);
-            if (delta <= 0.0) {
-              wall_shear[e] = Vec3{};
-              continue;
+          touching += static_cast<int64_t>(nb);
+          for (int32_t i = block; i < block_end; ++i) {
+            if (wall_start[i] == wall_start[i + 1]) continue;
+            const Vec3 xi = x[i], vi = v[i], wi = w[i];
+            const double ri = radius[i], mi = mass[i], inv_ii = inv_inertia[i];
+            Vec3 fi, ti;
+            // Particle-plane contacts of i (R* = r_i, m* = m_i: the wall is rigid and fixed).
+            for (int32_t e = wall_start[i]; e < wall_start[i + 1]; ++e) {
+              const Plane& pl = planes[wall_k[e]];
+              const double delta = ri - Dot(xi - pl.point, pl.normal);
+              if (delta <= 0.0) {
+                wall_shear[e] = Vec3{};
+                continue;
+              }
+              const Vec3 nrm = -pl.normal;  // from the particle to the wall
+              const Vec3 v_rel = -(vi + ri * Cross(wi, nrm));
+              const ContactForce cf = EvaluateContact(m.wall[mat[i] * np + wall_k[e]], nrm, delta,
+                                                      ri, mi, v_rel, wi, inv_ii, dt, wall_shear[e]);
+              const Vec3 fa = cf.ft - cf.fn * nrm;
+              fi += fa;
+              ti += ri * Cross(nrm, cf.ft) + cf.mr;
+              plane_force[wall_k[e]] -= fa;
+              worst = std::max(worst, delta / (2.0 * ri));
+              ++wall_touching;
             }
-            const Vec3 nrm = -pl.normal;  // from the particle to the wall
-            const Vec3 v_rel = -(vi + ri * Cross(wi, nrm));
-            const ContactForce cf = EvaluateContact(m.wall[mat[i] * np + wall_k[e]], nrm, delta,
-                                                    ri, mi, v_rel, wi, inv_ii, dt, wall_shear[e]);
-            const Vec3 fa = cf.ft - cf.fn * nrm;
-            fi += fa;
-            ti += ri * Cross(nrm, cf.ft) + cf.mr;
-            plane_force[wall_k[e]] -= fa;
-            worst = std::max(worst, delta / (2.0 * ri));
-            ++wall_touching;
+            f[i] += fi;
+            t[i] += ti;
           }
-          f[i] += fi;
-          t[i] += ti;
+          block = block_end;
         }
         m.slab_overlap[s] = worst;
         m.slab_contacts[s] = touching;
@@ -382,7 +547,8 @@ void System::ComputeForces() {
   m.contacts = m.wall_contacts = 0;
   double worst = 0;
   for (int s = 0; s < nslabs; ++s) {
-    for (int k = 0; k < np; ++k) plane_force_[k] += m.slab_plane_force[static_cast<size_t>(s) * np + k];
+    for (int k = 0; k < np; ++k)
+      plane_force_[k] += m.slab_plane_force[static_cast<size_t>(s) * np + k];
     m.contacts += m.slab_contacts[s];
     m.wall_contacts += m.slab_wall_contacts[s];
     worst = std::max(worst, m.slab_overlap[s]);
@@ -433,8 +599,10 @@ StepStatus System::Step() {
   inv_inertia = p_.inv_inertia.data();
   double max_v2 = 0;
   int bad = 0;
-#pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : max_v2) \
-    reduction(| : bad)
+#pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max       \
+                                                                              : max_v2) \
+    reduction(|                                                                         \
+              : bad)
   for (size_t i = 0; i < n; ++i) {
     v[i] += (h * inv_mass[i]) * f[i];
     w[i] += (h * inv_inertia[i]) * t[i];
@@ -470,9 +638,8 @@ void System::Diagnose(StepStatus* status) const {
     return std::make_pair(best, at);
   };
   if (status->flags & kNonFinite) {
-    auto [id, i] = first([&](size_t i) {
-      return !(IsFinite(p_.x[i]) && IsFinite(p_.v[i]) && IsFinite(p_.w[i]));
-    });
+    auto [id, i] = first(
+        [&](size_t i) { return !(IsFinite(p_.x[i]) && IsFinite(p_.v[i]) && IsFinite(p_.w[i])); });
     status->particle = id;
     msg << "particle " << id << " has a non-finite position or velocity at t = " << time_
         << " s; lower time_step.rayleigh_fraction";
@@ -509,8 +676,9 @@ void System::Diagnose(StepStatus* status) const {
       }
     }
     status->particle = id;
-    msg << "particle " << id << " overlaps by " << 100.0 * worst << "% of its diameter at t = "
-        << time_ << " s (limit " << 100.0 * config_.max_overlap_fraction
+    msg << "particle " << id << " overlaps by " << 100.0 * worst
+        << "% of its diameter at t = " << time_ << " s (limit "
+        << 100.0 * config_.max_overlap_fraction
         << "%); lower time_step.rayleigh_fraction or raise the shear modulus";
   }
   status->message = msg.str();

@@ -14,25 +14,26 @@ namespace dem {
 // An infinite plane wall: particles live on the side the normal points to.
 struct Plane {
   std::string name;
-  Vec3 point;      // a point on the plane [m]
-  Vec3 normal;     // unit normal into the particle side [-]
+  Vec3 point;   // a point on the plane [m]
+  Vec3 normal;  // unit normal into the particle side [-]
   int material = 0;
 };
 
 struct SystemConfig {
-  Vec3 gravity{0, 0, -9.81};  // [m/s^2]
-  double time_step = 0;       // [s]
-  double skin = 0;            // Verlet-list skin [m]; the list is rebuilt when a particle has
-                              // moved more than skin/2 since the last build
+  Vec3 gravity{0, 0, -9.81};    // [m/s^2]
+  double time_step = 0;         // [s]
+  double skin = 0;              // Verlet-list skin [m]; the list is rebuilt when a particle has
+                                // moved more than skin/2 since the last build
   Vec3 domain_min, domain_max;  // box that holds every particle; sets the cell grid [m]
   std::vector<Plane> planes;
   // Health limits (Step() reports, the caller decides to stop).
-  double max_speed = 100.0;          // runaway speed [m/s]; knob: time step, restitution
+  double max_speed = 100.0;            // runaway speed [m/s]; knob: time step, restitution
   double max_overlap_fraction = 0.05;  // overlap / smaller diameter; knob: time step, stiffness
 };
 
 // Persistent state of one contact, keyed by the persistent ids of its two sides. `b` is a particle
-// id, or -1 - k for plane k. `shear` is the Mindlin tangential spring displacement [m] as seen by a.
+// id, or -1 - k for plane k. `shear` is the Mindlin tangential spring displacement [m] as seen by
+// a.
 struct ContactRecord {
   int64_t a = 0;
   int64_t b = 0;
@@ -43,10 +44,10 @@ struct ContactRecord {
 // offence and `message` says what happened and which knob to turn.
 enum StepFlag : uint32_t {
   kStepOk = 0,
-  kNonFinite = 1u << 0,          // NaN/inf in a position or velocity: lower time_step
-  kExcessiveOverlap = 1u << 1,   // overlap above max_overlap_fraction: lower time_step or raise G
-  kRunawaySpeed = 1u << 2,       // speed above max_speed: lower time_step, check restitution <= 1
-  kLeftDomain = 1u << 3,         // particle outside domain_min..domain_max: add walls or enlarge
+  kNonFinite = 1u << 0,         // NaN/inf in a position or velocity: lower time_step
+  kExcessiveOverlap = 1u << 1,  // overlap above max_overlap_fraction: lower time_step or raise G
+  kRunawaySpeed = 1u << 2,      // speed above max_speed: lower time_step, check restitution <= 1
+  kLeftDomain = 1u << 3,        // particle outside domain_min..domain_max: add walls or enlarge
 };
 struct StepStatus {
   uint32_t flags = kStepOk;
@@ -59,25 +60,25 @@ struct StepStatus {
 // Per-particle state, one contiguous array per field, in storage order. Storage order changes when
 // the neighbour list reorders particles for locality; `id` is the persistent identity.
 struct Particles {
-  std::vector<int64_t> id;           // persistent id (N)
-  std::vector<Vec3> x;               // centre [m] (N)
-  std::vector<Vec3> v;               // velocity [m/s] (N)
-  std::vector<Vec3> w;               // angular velocity [rad/s] (N)
-  std::vector<Vec3> f;               // force of the last step [N] (N)
-  std::vector<Vec3> t;               // torque of the last step [N m] (N)
-  std::vector<double> radius;        // [m] (N)
-  std::vector<double> mass;          // [kg] (N)
-  std::vector<double> inv_mass;      // [1/kg] (N)
-  std::vector<double> inv_inertia;   // 1 / (2/5 m r^2) [1/(kg m^2)] (N)
-  std::vector<int32_t> material;     // index into the MaterialTable (N)
+  std::vector<int64_t> id;          // persistent id (N)
+  std::vector<Vec3> x;              // centre [m] (N)
+  std::vector<Vec3> v;              // velocity [m/s] (N)
+  std::vector<Vec3> w;              // angular velocity [rad/s] (N)
+  std::vector<Vec3> f;              // force of the last step [N] (N)
+  std::vector<Vec3> t;              // torque of the last step [N m] (N)
+  std::vector<double> radius;       // [m] (N)
+  std::vector<double> mass;         // [kg] (N)
+  std::vector<double> inv_mass;     // [1/kg] (N)
+  std::vector<double> inv_inertia;  // 1 / (2/5 m r^2) [1/(kg m^2)] (N)
+  std::vector<int32_t> material;    // index into the MaterialTable (N)
   size_t size() const { return id.size(); }
 };
 
 struct NeighborStats {
-  int64_t builds = 0;          // neighbour-list builds so far
-  int64_t pairs = 0;           // half-list pairs (within cutoff + skin) at the last build
-  int64_t contacts = 0;        // particle-particle pairs in contact after the last step
-  int64_t wall_contacts = 0;   // particle-plane contacts after the last step
+  int64_t builds = 0;         // neighbour-list builds so far
+  int64_t pairs = 0;          // half-list pairs (within cutoff + skin) at the last build
+  int64_t contacts = 0;       // particle-particle pairs in contact after the last step
+  int64_t wall_contacts = 0;  // particle-plane contacts after the last step
 };
 
 class System {
@@ -116,10 +117,10 @@ class System {
   void SetContacts(const std::vector<ContactRecord>& contacts);
 
   // Totals over all particles, summed in persistent-id order.
-  double KineticEnergy() const;   // translational + rotational [J]
-  double PotentialEnergy() const; // -m g . x [J]
-  double ElasticEnergy() const;   // normal Hertz energy 2/5 k delta^(5/2) of current contacts [J]
-  Vec3 Momentum() const;          // [kg m/s]
+  double KineticEnergy() const;    // translational + rotational [J]
+  double PotentialEnergy() const;  // -m g . x [J]
+  double ElasticEnergy() const;    // normal Hertz energy 2/5 k delta^(5/2) of current contacts [J]
+  Vec3 Momentum() const;           // [kg m/s]
   // FNV-1a 64 hash of (id, x, v, w, radius, material) in persistent-id order and of the time.
   uint64_t StateHash() const;
 
@@ -128,8 +129,10 @@ class System {
 
  private:
   void Rebuild();        // reorder storage by cell, rebuild the lists, carry the history over
-  void ComputeForces();  // gravity + contacts into p_.f, p_.t
+  void ComputeForces();  // contacts into p_.f, p_.t (which hold gravity already)
   void Diagnose(StepStatus* status) const;
+  struct ContactBatch;
+  void PairForces(ContactBatch& batch, size_t n);  // forces of a batch of touching pairs
 
   struct Impl;
   MaterialTable materials_;

@@ -13,17 +13,21 @@
 #   REMAKE_BED [0]   1: rebuild the cached LIGGGHTS bed
 #   MACHINE [hostname]  results go to bench/results/$MACHINE/liggghts_settle.csv
 #   RESULTS_DIR, CACHE_DIR  override bench/results/$MACHINE, bench/cache/liggghts
+#   KEEP_LOGS        directory to keep the LIGGGHTS logs and time -v output in
 #   QUIET_BUSY [0.15]   before each timed run wait until the machine is idle:
 #                       fraction of all CPUs busy (sampled over 2 s) below this
 #   QUIET_WAIT [300]    ...but wait at most this many seconds per run (then run
 #                       anyway; the row is marked "contended")
 #
-# Each row records cpu_busy_before (other load just before the run) and
-# cpu_pct_min (lowest "Percent of CPU this job got" over the ranks, from
-# /usr/bin/time -v).  A run is marked contended when cpu_busy_before >
-# QUIET_BUSY or cpu_pct_min < 90: on a shared 2-core machine such runs are
-# not representative; the summary medians use only uncontended runs when
-# there are any.
+# Each row records cpu_busy_before (load just before the run),
+# others_busy_during (CPU time used by other processes during the run, as a
+# fraction of all CPUs: /proc/stat busy time minus the ranks' user+sys time)
+# and cpu_pct_min (lowest "Percent of CPU this job got" over the ranks, from
+# /usr/bin/time -v).  A run is marked contended when cpu_busy_before or
+# others_busy_during > QUIET_BUSY, or cpu_pct_min < 90: on a shared 2-core
+# machine such runs are not representative (even a 1-rank run slows down
+# when the other core is busy); the summary medians use only uncontended
+# runs when there are any.
 #
 # Output: one JSON line per run and one summary JSON line (medians) per rank
 # count on stdout; CSV in bench/results/$MACHINE/liggghts_settle.csv.
@@ -60,6 +64,12 @@ cpu_busy() {
         busy=(u2+n2+s2+q2+sq2+st2)-(u1+n1+s1+q1+sq1+st1); idle=(i2+w2)-(i1+w1);
         tot=busy+idle; printf "%.3f", (tot>0 ? busy/tot : 0) }'
 }
+
+# total busy CPU time of the machine so far, in clock ticks (all CPUs)
+busy_ticks() {
+    awk '/^cpu /{print $2+$3+$4+$7+$8+$9; exit}' /proc/stat
+}
+CLK_TCK=$(getconf CLK_TCK 2>/dev/null || echo 100)
 
 # wait (at most QUIET_WAIT s) until cpu_busy < QUIET_BUSY; prints the last value
 wait_quiet() {
@@ -121,7 +131,11 @@ fi
 
 # ---------------------------------------------------------------- the runs --
 RUNDIR=$(mktemp -d "${TMPDIR:-/tmp}/liggghts_bench.XXXXXX")
-trap 'rm -rf "$RUNDIR"' EXIT
+if [ -n "${KEEP_LOGS:-}" ]; then
+    trap 'mkdir -p "$KEEP_LOGS" && cp -r "$RUNDIR"/. "$KEEP_LOGS"/ && rm -rf "$RUNDIR"' EXIT
+else
+    trap 'rm -rf "$RUNDIR"' EXIT
+fi
 RAW="$RUNDIR/raw.tsv"
 : > "$RAW"
 
@@ -129,18 +143,26 @@ for R in $RANKS; do
     for i in $(seq 1 "$NRUNS"); do
         d="$RUNDIR/r${R}_$i"; mkdir -p "$d"
         busy=$(wait_quiet)
+        b0=$(busy_ticks); t0=$(date +%s.%N)
         # one /usr/bin/time per rank -> peak RSS of every rank
         "${MPIRUN[@]}" -np "$R" sh -c \
             'exec /usr/bin/time -v -o "$0/time.${OMPI_COMM_WORLD_RANK:-0}" liggghts -nocite "$@"' "$d" \
             -in in.bench -var data "$DATA" -var nsteps "$NSTEPS" \
             -log "$d/log.liggghts" -screen none
+        b1=$(busy_ticks); t1=$(date +%s.%N)
+        # CPU used by other processes during the run: machine busy time minus
+        # this run's own user+sys time (all ranks), as a fraction of all CPUs
+        ours=$(grep -hE '(User|System) time \(seconds\)' "$d"/time.* | awk '{s+=$NF} END{print s+0}')
+        others=$(awk -v b0="$b0" -v b1="$b1" -v t0="$t0" -v t1="$t1" -v hz="$CLK_TCK" \
+                     -v ours="$ours" -v nc="$(nproc)" 'BEGIN{
+                 o=(b1-b0)/hz-ours; if (o<0) o=0; printf "%.3f", o/(nc*(t1-t0)) }')
         line=$(grep -E '^Loop time of .* steps with .* atoms' "$d/log.liggghts" | head -1)
         [ -n "$line" ] || { log "no 'Loop time' line in $d/log.liggghts"; exit 1; }
         rss=$(grep -h 'Maximum resident set size' "$d"/time.* | awk '{print $NF}' | tr '\n' ' ')
         cpp=$(sed -n 's/^in.bench: contacts\/particle \([^,]*\),.*/\1/p' "$d/log.liggghts" | tail -1)
         pct=$(grep -h 'Percent of CPU this job got' "$d"/time.* | awk '{gsub("%","",$NF); print $NF}' | sort -n | head -1)
-        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$R" "$i" "$line" "$rss" "${cpp:-nan}" "$busy" "${pct:-0}" >> "$RAW"
-        log "ranks=$R run=$i: $line (busy before $busy, min cpu% $pct)"
+        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$R" "$i" "$line" "$rss" "${cpp:-nan}" "$busy" "${pct:-0}" "$others" >> "$RAW"
+        log "ranks=$R run=$i: $line (busy before $busy, others during $others, min cpu% $pct)"
     done
 done
 
@@ -154,7 +176,7 @@ quiet = float(quiet)
 pat = re.compile(r"Loop time of (\S+) on (\d+) procs for (\d+) steps with (\d+) atoms")
 rows = []
 for ln in open(raw):
-    r, i, line, rss, cpp, busy, pct = ln.rstrip("\n").split("\t")
+    r, i, line, rss, cpp, busy, pct, others = ln.rstrip("\n").split("\t")
     m = pat.search(line)
     x, p, n, mm = float(m.group(1)), int(m.group(2)), int(m.group(3)), int(m.group(4))
     rss_kb = [int(v) for v in rss.split()]
@@ -164,8 +186,10 @@ for ln in open(raw):
            "peak_rss_mb": round(max(rss_kb) / 1024.0, 1),          # per rank (max)
            "peak_rss_total_mb": round(sum(rss_kb) / 1024.0, 1),    # all ranks
            "contacts_per_particle": float(cpp),
-           "cpu_busy_before": float(busy), "cpu_pct_min": int(float(pct)),
-           "contended": bool(float(busy) > quiet or float(pct) < 90),
+           "cpu_busy_before": float(busy), "others_busy_during": float(others),
+           "cpu_pct_min": int(float(pct)),
+           "contended": bool(float(busy) > quiet or float(others) > quiet
+                             or float(pct) < 90),
            "bed": bed}
     rows.append(row)
     print(json.dumps(row))
@@ -175,7 +199,8 @@ with open(csv, "w") as f:
             % (machine, cpu, ncores, datetime.datetime.now().isoformat(timespec="seconds")))
     keys = ["code", "ranks", "run", "particles", "steps", "wall_s",
             "particle_steps_per_s", "peak_rss_mb", "peak_rss_total_mb",
-            "contacts_per_particle", "cpu_busy_before", "cpu_pct_min",
+            "contacts_per_particle", "cpu_busy_before", "others_busy_during",
+            "cpu_pct_min",
             "contended", "bed"]
     f.write(",".join(keys) + "\n")
     for row in rows:
@@ -192,6 +217,7 @@ for p in sorted({r["ranks"] for r in rows}):
                       "particles": rr[0]["particles"],
                       "steps": rr[0]["steps"], "wall_s": round(med("wall_s"), 4),
                       "particle_steps_per_s": round(med("particle_steps_per_s")),
+                      "best_particle_steps_per_s": max(r["particle_steps_per_s"] for r in rr),
                       "peak_rss_mb": round(med("peak_rss_mb"), 1),
                       "peak_rss_total_mb": round(med("peak_rss_total_mb"), 1),
                       "bed": bed, "cpu": cpu}))
