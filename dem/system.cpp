@@ -14,13 +14,14 @@
 namespace dem {
 
 // Contacts gathered before one vectorised force evaluation (a block of particles' worth).
-constexpr size_t kBatchContacts = 256;
+constexpr size_t kBatchContacts = 64;  // ~40 arrays x 64 x 8 B: stays in L1
 
 // Per-thread scratch of the force pass: the particle-pair contacts of a block of particles,
 // gathered so their forces can be computed in one vectorised loop (structure of arrays).
 struct System::ContactBatch {
   // Inputs, gathered by the scalar pass (structure of arrays, one entry per touching pair).
   std::vector<int32_t> i, j, k;        // owner, partner, list entry
+  std::vector<uint8_t> was;            // the pair touched at the last step
   std::vector<double> dx, dy, dz;      // x_j - x_i [m]
   std::vector<double> dvx, dvy, dvz;   // v_j - v_i [m/s]
   std::vector<double> ax, ay, az;      // r_i w_i + r_j w_j [m/s]
@@ -36,6 +37,7 @@ struct System::ContactBatch {
   std::vector<double> overlap;        // delta / smaller diameter
   void Resize(size_t n) {
     for (auto* a : {&i, &j, &k}) a->resize(n);
+    was.resize(n);
     for (auto* a : {&dx,          &dy,      &dz,     &dvx,  &dvy,
                     &dvz,         &ax,      &ay,     &az,   &wx,
                     &wy,          &wz,      &ri,     &rj,   &m_star,
@@ -55,6 +57,8 @@ struct System::Impl {
   bool list_valid = false;  // list indices refer to the current storage
   bool needs_rebuild = true;
   std::vector<Vec3> shear;    // tangential history of each list pair [m] (num_pairs)
+  std::vector<uint8_t> touching;  // the pair touched at the last force evaluation (num_pairs);
+                                  // the shear of a pair that did not is stale and reads as zero
   std::vector<Vec3> x_build;  // positions at the last build [m] (N)
   double skin = 0;
   double cutoff_radius = 0;  // largest radius the grid was set up for [m]
@@ -211,7 +215,7 @@ std::vector<ContactRecord> System::Contacts() const {
     const size_t n_listed = m.list.start.empty() ? 0 : m.list.start.size() - 1;
     for (size_t i = 0; i < n_listed; ++i)
       for (int32_t k = m.list.start[i]; k < m.list.start[i + 1]; ++k)
-        if (Norm2(m.shear[k]) > 0.0)
+        if (m.touching[k] && Norm2(m.shear[k]) > 0.0)
           out.push_back({p_.id[i], p_.id[m.list.partner[k]], m.shear[k]});
     for (size_t e = 0; e < m.wall_i.size(); ++e)
       if (Norm2(m.wall_shear[e]) > 0.0)
@@ -241,13 +245,25 @@ void System::Rebuild() {
     m.pending.swap(records);
   }
   // 2. Grid sized for the present particles; reorder storage by cell, ties by persistent id.
+  // The grid spans the particles' bounding box (within the domain), so that every slab holds
+  // particles and the slabs share the work evenly.
   double r_max = 0;
-  for (double r : p_.radius) r_max = std::max(r_max, r);
-  if (r_max > m.cutoff_radius || n > 2 * m.grid_capacity || n < m.grid_capacity / 4) {
-    m.cutoff_radius = r_max;
-    m.grid_capacity = std::max<size_t>(n, 1);
-    m.list.SetupGrid(config_.domain_min, config_.domain_max, 2 * r_max + m.skin, n);
+  Vec3 lo = config_.domain_max, hi = config_.domain_min;
+  for (size_t i = 0; i < n; ++i) {
+    r_max = std::max(r_max, p_.radius[i]);
+    const Vec3& xi = p_.x[i];
+    lo = {std::min(lo.x, xi.x), std::min(lo.y, xi.y), std::min(lo.z, xi.z)};
+    hi = {std::max(hi.x, xi.x), std::max(hi.y, xi.y), std::max(hi.z, xi.z)};
   }
+  lo = {std::max(lo.x, config_.domain_min.x), std::max(lo.y, config_.domain_min.y),
+        std::max(lo.z, config_.domain_min.z)};
+  hi = {std::min(hi.x, config_.domain_max.x), std::min(hi.y, config_.domain_max.y),
+        std::min(hi.z, config_.domain_max.z)};
+  if (!(hi.x > lo.x && hi.y > lo.y && hi.z > lo.z)) {
+    lo = config_.domain_min;
+    hi = config_.domain_max;
+  }
+  m.list.SetupGrid(lo, hi, 2 * r_max + m.skin, n);
   m.index_of_id.assign(next_id_, -1);
   for (size_t i = 0; i < n; ++i) m.index_of_id[p_.id[i]] = static_cast<int32_t>(i);
   m.visit.clear();
@@ -270,6 +286,7 @@ void System::Rebuild() {
   // 3. Particle pairs and particle-plane candidates within reach (+ skin).
   m.list.Build(p_.x.data(), p_.radius.data(), n, m.skin, num_threads_);
   m.shear.assign(m.list.num_pairs(), Vec3{});
+  m.touching.assign(m.list.num_pairs(), 0);
   int32_t longest = 0;
   for (size_t i = 0; i < n; ++i) longest = std::max(longest, m.list.start[i + 1] - m.list.start[i]);
   m.batch_capacity = std::max<size_t>(kBatchContacts, 2 * static_cast<size_t>(longest));
@@ -301,6 +318,7 @@ void System::Rebuild() {
       for (int32_t k = m.list.start[owner]; k < m.list.start[owner + 1]; ++k)
         if (m.list.partner[k] == other) {
           m.shear[k] = owner == ia ? c.shear : -c.shear;
+          m.touching[k] = 1;
           break;
         }
     } else {
@@ -417,6 +435,7 @@ void System::ComputeForces() {
   const int32_t* start = m.list.start.data();
   const int32_t* partner = m.list.partner.data();
   Vec3* shear = m.shear.data();
+  uint8_t* touched = m.touching.data();
   const int32_t* wall_start = m.wall_start.data();
   const int32_t* wall_k = m.wall_k.data();
   Vec3* wall_shear = m.wall_shear.data();
@@ -439,58 +458,65 @@ void System::ComputeForces() {
         const int32_t slab_end = m.list.slab_start[s + 1];
         int32_t block = m.list.slab_start[s];
         while (block < slab_end) {
-          // 1. Gather the touching pairs of a block of particles (scalar, cheap); pairs that
-          //    are apart lose their tangential history.
+          // 1. Find the touching pairs of a block of particles without branching on the
+          //    outcome (a contact is a coin toss for the branch predictor): write every
+          //    candidate at slot nb and advance nb only for a contact. `touching` remembers
+          //    which pairs touched at the last step; a pair that comes into contact starts with
+          //    no tangential history.
           size_t nb = 0;
           int32_t block_end = block;
           for (; block_end < slab_end; ++block_end) {
             const int32_t i = block_end;
             if (nb + static_cast<size_t>(start[i + 1] - start[i]) > m.batch_capacity) break;
-            const Vec3 xi = x[i], vi = v[i], wi = w[i];
-            const double ri = radius[i], mi = mass[i], inv_ii = inv_inertia[i];
-            const PairConstants* pci = pc + mat[i] * nm;
+            const Vec3 xi = x[i];
+            const double ri = radius[i];
             for (int32_t k = start[i]; k < start[i + 1]; ++k) {
               const int32_t j = partner[k];
               const double rsum = ri + radius[j];
-              const Vec3 d = x[j] - xi;
-              if (Norm2(d) < rsum * rsum) {
-                const PairConstants& pcij = pci[mat[j]];
-                batch.i[nb] = i;
-                batch.j[nb] = j;
-                batch.k[nb] = k;
-                batch.dx[nb] = d.x;
-                batch.dy[nb] = d.y;
-                batch.dz[nb] = d.z;
-                const Vec3 dv = v[j] - vi;
-                batch.dvx[nb] = dv.x;
-                batch.dvy[nb] = dv.y;
-                batch.dvz[nb] = dv.z;
-                const Vec3 a = ri * wi + radius[j] * w[j];
-                batch.ax[nb] = a.x;
-                batch.ay[nb] = a.y;
-                batch.az[nb] = a.z;
-                const Vec3 wr = wi - w[j];
-                batch.wx[nb] = wr.x;
-                batch.wy[nb] = wr.y;
-                batch.wz[nb] = wr.z;
-                batch.ri[nb] = ri;
-                batch.rj[nb] = radius[j];
-                batch.m_star[nb] = mi * mass[j] / (mi + mass[j]);
-                batch.inv_inertia[nb] = inv_ii + inv_inertia[j];
-                batch.e_star[nb] = pcij.e_star;
-                batch.g_star[nb] = pcij.g_star;
-                batch.damp[nb] = pcij.damp;
-                batch.tangential_ratio[nb] = pcij.tangential_ratio;
-                batch.friction[nb] = pcij.friction;
-                batch.rolling[nb] = pcij.rolling_friction;
-                batch.sx[nb] = shear[k].x;
-                batch.sy[nb] = shear[k].y;
-                batch.sz[nb] = shear[k].z;
-                ++nb;
-              } else if (shear[k].x != 0.0 || shear[k].y != 0.0 || shear[k].z != 0.0) {
-                shear[k] = Vec3{};
-              }
+              const bool contact = Norm2(x[j] - xi) < rsum * rsum;
+              batch.i[nb] = i;
+              batch.j[nb] = j;
+              batch.k[nb] = k;
+              batch.was[nb] = touched[k];
+              touched[k] = contact;
+              nb += contact;
             }
+          }
+          // Gather what the force law needs, one contact at a time (no branches).
+          for (size_t b = 0; b < nb; ++b) {
+            const int32_t i = batch.i[b], j = batch.j[b], k = batch.k[b];
+            const PairConstants& pcij = pc[mat[i] * nm + mat[j]];
+            const double ri = radius[i], rj = radius[j];
+            const Vec3 d = x[j] - x[i];
+            batch.dx[b] = d.x;
+            batch.dy[b] = d.y;
+            batch.dz[b] = d.z;
+            const Vec3 dv = v[j] - v[i];
+            batch.dvx[b] = dv.x;
+            batch.dvy[b] = dv.y;
+            batch.dvz[b] = dv.z;
+            const Vec3 a = ri * w[i] + rj * w[j];
+            batch.ax[b] = a.x;
+            batch.ay[b] = a.y;
+            batch.az[b] = a.z;
+            const Vec3 wr = w[i] - w[j];
+            batch.wx[b] = wr.x;
+            batch.wy[b] = wr.y;
+            batch.wz[b] = wr.z;
+            batch.ri[b] = ri;
+            batch.rj[b] = rj;
+            batch.m_star[b] = mass[i] * mass[j] / (mass[i] + mass[j]);
+            batch.inv_inertia[b] = inv_inertia[i] + inv_inertia[j];
+            batch.e_star[b] = pcij.e_star;
+            batch.g_star[b] = pcij.g_star;
+            batch.damp[b] = pcij.damp;
+            batch.tangential_ratio[b] = pcij.tangential_ratio;
+            batch.friction[b] = pcij.friction;
+            batch.rolling[b] = pcij.rolling_friction;
+            const double keep = batch.was[b] ? 1.0 : 0.0;
+            batch.sx[b] = keep * shear[k].x;
+            batch.sy[b] = keep * shear[k].y;
+            batch.sz[b] = keep * shear[k].z;
           }
           // 2. Contact forces of the batch, one contact per SIMD lane (EvaluateContact, written
           //    without branches).
