@@ -60,7 +60,10 @@ double BetaForRestitution(double e) {
   while (RestitutionForBeta(hi) > e) hi *= 2.0;
   for (int it = 0; it < 60 && hi - lo > 1e-12; ++it) {
     const double mid = 0.5 * (lo + hi);
-    if (RestitutionForBeta(mid) > e) lo = mid; else hi = mid;
+    if (RestitutionForBeta(mid) > e)
+      lo = mid;
+    else
+      hi = mid;
   }
   const double beta = 0.5 * (lo + hi);
   std::lock_guard<std::mutex> lock(mutex);

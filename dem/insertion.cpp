@@ -9,8 +9,8 @@ std::vector<SphereSeed> InsertSpheres(const Vec3& lo, const Vec3& hi, int64_t co
                                       double r_max, double solid_fraction, Rng& rng) {
   std::vector<SphereSeed> out;
   // Mean sphere volume over the radius distribution relative to the largest sphere.
-  const double mean_r3 = (std::pow(r_max, 4) - std::pow(r_min, 4)) /
-                         (4.0 * std::max(r_max - r_min, 1e-300));
+  const double mean_r3 =
+      (std::pow(r_max, 4) - std::pow(r_min, 4)) / (4.0 * std::max(r_max - r_min, 1e-300));
   const double r3 = r_max > r_min ? mean_r3 : r_max * r_max * r_max;
   // Pitch a: one sphere of mean volume per a^3 gives the requested solid fraction.
   double a = std::cbrt(4.0 / 3.0 * M_PI * r3 / std::max(solid_fraction, 1e-6));

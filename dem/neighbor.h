@@ -42,8 +42,8 @@ class NeighborList {
 
   Vec3 lo_;
   double inv_cell_ = 0;
-  int n_[3] = {1, 1, 1};  // cells along (slab axis, second axis, third axis)
-  int axis_[3] = {0, 1, 2};  // world axis of each grid axis
+  int n_[3] = {1, 1, 1};             // cells along (slab axis, second axis, third axis)
+  int axis_[3] = {0, 1, 2};          // world axis of each grid axis
   std::vector<int64_t> key_;         // cell key of each particle (n), in storage order after sort
   std::vector<int32_t> cell_start_;  // first particle of each cell (num_cells + 1)
   std::vector<int32_t> count_;       // scratch (num_cells)

@@ -20,14 +20,16 @@ constexpr size_t kBatchContacts = 64;  // ~40 arrays x 64 x 8 B: stays in L1
 // gathered so their forces can be computed in one vectorised loop (structure of arrays).
 struct System::ContactBatch {
   // Inputs, gathered by the scalar pass (structure of arrays, one entry per touching pair).
-  std::vector<int32_t> i, j, k;        // owner, partner, list entry
-  std::vector<uint8_t> was;            // the pair touched at the last step
-  std::vector<double> dx, dy, dz;      // x_j - x_i [m]
-  std::vector<double> dvx, dvy, dvz;   // v_j - v_i [m/s]
-  std::vector<double> ax, ay, az;      // r_i w_i + r_j w_j [m/s]
-  std::vector<double> wx, wy, wz;      // w_i - w_j [rad/s]
-  std::vector<double> ri, rj, m_star;  // radii [m], reduced mass [kg]
-  std::vector<double> inv_inertia;     // 1/I_i + 1/I_j [1/(kg m^2)]
+  std::vector<int32_t> i, j, k;       // owner, partner, list entry
+  std::vector<uint8_t> was;           // the pair touched at the last step
+  std::vector<double> dx, dy, dz;     // x_j - x_i [m]
+  std::vector<double> dvx, dvy, dvz;  // v_j - v_i [m/s]
+  std::vector<double> ax, ay, az;     // r_i w_i + r_j w_j [m/s]
+  std::vector<double> wx, wy, wz;     // w_i - w_j [rad/s]
+  std::vector<double> ri, rj;         // radii [m]
+  std::vector<double> inv_m_star;     // 1/m_i + 1/m_j [1/kg]
+  std::vector<int32_t> pair;          // index of the material pair
+  std::vector<double> inv_inertia;    // 1/I_i + 1/I_j [1/(kg m^2)]
   std::vector<double> e_star, g_star, damp, tangential_ratio, friction, rolling;  // PairConstants
   std::vector<double> sx, sy, sz;  // tangential history in, then out [m]
   // Outputs.
@@ -36,11 +38,11 @@ struct System::ContactBatch {
   std::vector<double> tjx, tjy, tjz;  // torque on j [N m]
   std::vector<double> overlap;        // delta / smaller diameter
   void Resize(size_t n) {
-    for (auto* a : {&i, &j, &k}) a->resize(n);
+    for (auto* a : {&i, &j, &k, &pair}) a->resize(n);
     was.resize(n);
     for (auto* a : {&dx,          &dy,      &dz,     &dvx,  &dvy,
                     &dvz,         &ax,      &ay,     &az,   &wx,
-                    &wy,          &wz,      &ri,     &rj,   &m_star,
+                    &wy,          &wz,      &ri,     &rj,   &inv_m_star,
                     &inv_inertia, &e_star,  &g_star, &damp, &tangential_ratio,
                     &friction,    &rolling, &sx,     &sy,   &sz,
                     &fx,          &fy,      &fz,     &tix,  &tiy,
@@ -56,10 +58,10 @@ struct System::Impl {
   NeighborList list;
   bool list_valid = false;  // list indices refer to the current storage
   bool needs_rebuild = true;
-  std::vector<Vec3> shear;    // tangential history of each list pair [m] (num_pairs)
+  std::vector<Vec3> shear;        // tangential history of each list pair [m] (num_pairs)
   std::vector<uint8_t> touching;  // the pair touched at the last force evaluation (num_pairs);
                                   // the shear of a pair that did not is stale and reads as zero
-  std::vector<Vec3> x_build;  // positions at the last build [m] (N)
+  std::vector<Vec3> x_build;      // positions at the last build [m] (N)
   double skin = 0;
   double cutoff_radius = 0;  // largest radius the grid was set up for [m]
   size_t grid_capacity = 0;  // particle count the grid was sized for
@@ -359,7 +361,7 @@ void System::PairForces(ContactBatch& b, size_t nb) {
     // Normal: Hertz spring + damping, no tension.
     const double sq = std::sqrt(r_star * delta);
     const double sn = 2.0 * c.e_star[e] * sq;
-    const double gamma_n = c.damp[e] * std::sqrt(sn * c.m_star[e]);
+    const double gamma_n = c.damp[e] * std::sqrt(sn / c.inv_m_star[e]);
     const double fn = std::max(0.0, 2.0 / 3.0 * sn * delta - gamma_n * vn);
     // Tangential history: back into the tangent plane at its old length, plus v_t dt.
     double sx = c.sx[e], sy = c.sy[e], sz = c.sz[e];
@@ -430,6 +432,7 @@ void System::ComputeForces() {
   const Vec3* w = p_.w.data();
   const double* radius = p_.radius.data();
   const double* mass = p_.mass.data();
+  const double* inv_mass = p_.inv_mass.data();
   const double* inv_inertia = p_.inv_inertia.data();
   const int32_t* mat = p_.material.data();
   const int32_t* start = m.list.start.data();
@@ -483,9 +486,12 @@ void System::ComputeForces() {
             }
           }
           // Gather what the force law needs, one contact at a time (no branches).
+          bool uniform = true;
           for (size_t b = 0; b < nb; ++b) {
             const int32_t i = batch.i[b], j = batch.j[b], k = batch.k[b];
-            const PairConstants& pcij = pc[mat[i] * nm + mat[j]];
+            const int32_t pair = mat[i] * nm + mat[j];
+            batch.pair[b] = pair;
+            uniform = uniform && pair == batch.pair[0];
             const double ri = radius[i], rj = radius[j];
             const Vec3 d = x[j] - x[i];
             batch.dx[b] = d.x;
@@ -505,18 +511,25 @@ void System::ComputeForces() {
             batch.wz[b] = wr.z;
             batch.ri[b] = ri;
             batch.rj[b] = rj;
-            batch.m_star[b] = mass[i] * mass[j] / (mass[i] + mass[j]);
+            batch.inv_m_star[b] = inv_mass[i] + inv_mass[j];
             batch.inv_inertia[b] = inv_inertia[i] + inv_inertia[j];
-            batch.e_star[b] = pcij.e_star;
-            batch.g_star[b] = pcij.g_star;
-            batch.damp[b] = pcij.damp;
-            batch.tangential_ratio[b] = pcij.tangential_ratio;
-            batch.friction[b] = pcij.friction;
-            batch.rolling[b] = pcij.rolling_friction;
             const double keep = batch.was[b] ? 1.0 : 0.0;
             batch.sx[b] = keep * shear[k].x;
             batch.sy[b] = keep * shear[k].y;
             batch.sz[b] = keep * shear[k].z;
+          }
+          // Material constants: one broadcast when the batch holds one material pair (the
+          // common case), else per contact.
+          for (size_t b = 0; b < nb; b = uniform ? nb : b + 1) {
+            const PairConstants& c = pc[batch.pair[b]];
+            const size_t end = uniform ? nb : b + 1;
+            std::fill(batch.e_star.begin() + b, batch.e_star.begin() + end, c.e_star);
+            std::fill(batch.g_star.begin() + b, batch.g_star.begin() + end, c.g_star);
+            std::fill(batch.damp.begin() + b, batch.damp.begin() + end, c.damp);
+            std::fill(batch.tangential_ratio.begin() + b, batch.tangential_ratio.begin() + end,
+                      c.tangential_ratio);
+            std::fill(batch.friction.begin() + b, batch.friction.begin() + end, c.friction);
+            std::fill(batch.rolling.begin() + b, batch.rolling.begin() + end, c.rolling_friction);
           }
           // 2. Contact forces of the batch, one contact per SIMD lane (EvaluateContact, written
           //    without branches).

@@ -18,8 +18,8 @@ dem::SystemConfig MakeSystemConfig(const Scene& scene) {
   c.domain_max = hi;
   const int wall = scene.materials.Find(scene.wall_material);
   c.planes = {
-      {"floor", lo, {0, 0, 1}, wall},   {"x_min", lo, {1, 0, 0}, wall},
-      {"x_max", hi, {-1, 0, 0}, wall},  {"y_min", lo, {0, 1, 0}, wall},
+      {"floor", lo, {0, 0, 1}, wall},  {"x_min", lo, {1, 0, 0}, wall},
+      {"x_max", hi, {-1, 0, 0}, wall}, {"y_min", lo, {0, 1, 0}, wall},
       {"y_max", hi, {0, -1, 0}, wall},
   };
   return c;
@@ -50,8 +50,7 @@ SettleReport Settle(dem::System* system, double mean_ke, double min_time, double
   }
 }
 
-SettleReport FillAndSettle(const Scene& scene, dem::System* system,
-                           const SettleObserver& observe) {
+SettleReport FillAndSettle(const Scene& scene, dem::System* system, const SettleObserver& observe) {
   SettleReport total;
   const BedSpec& bed = scene.bed;
   const int material = scene.materials.Find(bed.material);

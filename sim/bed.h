@@ -14,12 +14,12 @@ namespace sim {
 dem::SystemConfig MakeSystemConfig(const Scene& scene);
 
 struct SettleReport {
-  bool settled = false;       // mean kinetic energy per particle fell below the threshold
-  double mean_ke = 0;         // at the end [J]
-  double sim_time = 0;        // simulated time spent [s]
+  bool settled = false;  // mean kinetic energy per particle fell below the threshold
+  double mean_ke = 0;    // at the end [J]
+  double sim_time = 0;   // simulated time spent [s]
   int64_t steps = 0;
-  int layers = 0;             // insertion layers poured
-  dem::StepStatus status;     // first bad step, if any
+  int layers = 0;          // insertion layers poured
+  dem::StepStatus status;  // first bad step, if any
 };
 
 // Called every few hundred steps with the system, for progress output and stop requests;

@@ -95,9 +95,10 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
   SaveBed(options.output, *system, scene.yaml_text);
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  std::fprintf(stderr, "scoopsim: bed of %zu particles, %d layer(s), %.3f s simulated in %.1f s; "
-               "saved %s\n", system->particles().size(), r.layers, r.sim_time, wall,
-               options.output.c_str());
+  std::fprintf(stderr,
+               "scoopsim: bed of %zu particles, %d layer(s), %.3f s simulated in %.1f s; "
+               "saved %s\n",
+               system->particles().size(), r.layers, r.sim_time, wall, options.output.c_str());
   return status;
 }
 
@@ -190,8 +191,7 @@ int BenchSettle(const BenchSettleOptions& options) {
   scene.box_max.z = std::max(scene.box_max.z, scene.box_min.z + 1.2 * loose_height + 4 * r);
 
   const std::string dir = options.cache_dir.empty() ? source + "/bench/cache" : options.cache_dir;
-  const std::string bed_path =
-      dir + "/settle_" + std::to_string(options.particles) + ".h5";
+  const std::string bed_path = dir + "/settle_" + std::to_string(options.particles) + ".h5";
   auto system = MakeSystem(scene, options.threads);
   if (fs::exists(bed_path)) {
     LoadBed(bed_path, system.get());
@@ -220,8 +220,8 @@ int BenchSettle(const BenchSettleOptions& options) {
       "{\"bench\":\"settle\",\"particles\":%lld,\"steps\":%lld,\"threads\":%d,\"wall_s\":%.4f,"
       "\"particle_steps_per_s\":%.4g,\"contacts_per_particle\":%.3f,\"neighbor_builds\":%lld,"
       "\"peak_rss_mb\":%.1f,\"state_hash\":\"%016llx\"}\n",
-      static_cast<long long>(n), static_cast<long long>(options.steps), system->num_threads(),
-      wall, n * static_cast<double>(options.steps) / wall,
+      static_cast<long long>(n), static_cast<long long>(options.steps), system->num_threads(), wall,
+      n * static_cast<double>(options.steps) / wall,
       (2.0 * ns.contacts + ns.wall_contacts) / std::max<int64_t>(n, 1),
       static_cast<long long>(ns.builds), PeakRssMb(),
       static_cast<unsigned long long>(system->StateHash()));

@@ -9,9 +9,9 @@
 namespace sim {
 
 struct RunOptions {
-  int threads = 0;          // 0 = all cores
-  std::string output;       // output HDF5 path
-  bool quiet = false;       // no progress output
+  int threads = 0;     // 0 = all cores
+  std::string output;  // output HDF5 path
+  bool quiet = false;  // no progress output
 };
 
 // `scoopsim bed SCENE -o BED.h5`: fill the scene's box, settle, save the bed.

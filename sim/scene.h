@@ -50,9 +50,9 @@ struct Scene {
   dem::Vec3 box_min, box_max;      // container [m]: floor and four side walls, open top
   std::string wall_material;       // material of the container walls
   BedSpec bed;
-  double duration = 0;             // simulated time of `scoopsim run` [s]
+  double duration = 0;  // simulated time of `scoopsim run` [s]
   OutputSpec output;
-  int threads = 0;                 // 0 = all cores (CLI --threads overrides)
+  int threads = 0;  // 0 = all cores (CLI --threads overrides)
 };
 
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.

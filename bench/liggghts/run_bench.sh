@@ -102,11 +102,13 @@ MPIRUN=(mpirun)
 [ "$(id -u)" = 0 ] && MPIRUN+=(--allow-run-as-root)
 
 mkdir -p "$CACHE" "$RESDIR"
+# Resolve the bed's path before leaving the caller's folder.
+if [ $# -ge 1 ]; then BED_ARG=$(cd "$(dirname "$1")" && pwd)/$(basename "$1"); fi
 cd "$HERE"     # in.bench / in.make_bed include in.material and in.walls
 
 # ---------------------------------------------------------------- the bed --
 if [ $# -ge 1 ]; then
-    BED_SRC=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
+    BED_SRC=$BED_ARG
     DATA="$CACHE/$(basename "${1%.h5}").data"
     log "converting $BED_SRC -> $DATA"
     "$PY" "$HERE/h5_to_liggghts.py" "$BED_SRC" "$DATA" >&2

@@ -54,7 +54,13 @@ TEST_P(RestitutionTest, SphereSphereHeadOn) {
     const size_t a = p.id[0] == 0 ? 0 : 1, b = 1 - a;
     return std::make_pair(p.x[b].x - p.x[a].x, p.v[b].x - p.v[a].x);
   };
-  ASSERT_TRUE(RunUntil(s, [&] { const auto [d, vr] = rel(); return vr > 0 && d > 2 * kRadius + gap; }, 2'000'000));
+  ASSERT_TRUE(RunUntil(
+      s,
+      [&] {
+        const auto [d, vr] = rel();
+        return vr > 0 && d > 2 * kRadius + gap;
+      },
+      2'000'000));
   EXPECT_NEAR(rel().second / speed, e, 0.01 * e) << "speed " << speed;
 }
 
@@ -65,7 +71,13 @@ TEST_P(RestitutionTest, SpherePlaneHeadOn) {
   System s(test::SnowAndSteel({e, 0.58, 0.05}, {e, 0.58, 0.05}), c);
   s.set_num_threads(1);
   s.AddParticle({0, 0, kRadius + 1e-5}, {0, 0, -speed}, {}, kRadius, 0);
-  ASSERT_TRUE(RunUntil(s, [&] { const Particles& p = s.particles(); return p.v[0].z > 0 && p.x[0].z > kRadius + 1e-5; }, 2'000'000));
+  ASSERT_TRUE(RunUntil(
+      s,
+      [&] {
+        const Particles& p = s.particles();
+        return p.v[0].z > 0 && p.x[0].z > kRadius + 1e-5;
+      },
+      2'000'000));
   EXPECT_NEAR(s.particles().v[0].z / speed, e, 0.01 * e) << "speed " << speed;
 }
 
@@ -127,7 +139,11 @@ TEST(RollingTest, RollingFrictionDeceleration) {
   while (s.time() < t_end) {
     test::StepOk(s);
     const double t = s.time(), v = s.particles().v[0].x;
-    st += t; sv += v; stt += t * t; stv += t * v; ++n;
+    st += t;
+    sv += v;
+    stt += t * t;
+    stv += t * v;
+    ++n;
   }
   const double slope = (n * stv - st * sv) / (n * stt - st * st);
   const double expected = -5.0 / 7.0 * mu_r * g;

@@ -83,7 +83,8 @@ TEST(NeighborTest, PartnersLieInOwnOrNextSlab) {
   ASSERT_GT(list.num_slabs(), 4);
   auto slab_of = [&](int32_t i) {
     return static_cast<int>(std::upper_bound(list.slab_start.begin(), list.slab_start.end(), i) -
-                            list.slab_start.begin()) - 1;
+                            list.slab_start.begin()) -
+           1;
   };
   for (size_t i = 0; i + 1 < list.start.size(); ++i)
     for (int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {

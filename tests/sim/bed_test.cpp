@@ -74,8 +74,8 @@ void Bed::OverlapsSmall() {
       worst = std::max(worst, (p.radius[i] + p.radius[j] - dem::Norm(p.x[i] - p.x[j])) /
                                   (2 * std::min(p.radius[i], p.radius[j])));
     for (const dem::Plane& pl : system_->config().planes)
-      worst = std::max(worst, (p.radius[i] - dem::Dot(p.x[i] - pl.point, pl.normal)) /
-                                  (2 * p.radius[i]));
+      worst = std::max(worst,
+                       (p.radius[i] - dem::Dot(p.x[i] - pl.point, pl.normal)) / (2 * p.radius[i]));
   }
   EXPECT_LT(worst, 0.005);
   EXPECT_GT(worst, 0.0) << "a bed at rest has contacts";

@@ -19,8 +19,8 @@ const std::string kSourceDir = SCOOPSIM_SOURCE_DIR;
 
 fs::path TempDir() {
   static const fs::path dir = [] {
-    const fs::path p = fs::temp_directory_path() /
-                       ("scoopsim_determinism_" + std::to_string(::getpid()));
+    const fs::path p =
+        fs::temp_directory_path() / ("scoopsim_determinism_" + std::to_string(::getpid()));
     fs::remove_all(p);
     fs::create_directories(p);
     return p;
