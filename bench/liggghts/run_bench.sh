@@ -11,6 +11,8 @@
 #   RANKS ["1 2"]    MPI rank counts to run
 #   MAKE_RANKS [2]   ranks used by in.make_bed
 #   REMAKE_BED [0]   1: rebuild the cached LIGGGHTS bed
+#   MAKE_VARS [""]   extra liggghts arguments for in.make_bed, e.g.
+#                    "-var vfinal 0.00055" (scoopsim's settle criterion)
 #   MACHINE [hostname]  results go to bench/results/$MACHINE/liggghts_settle.csv
 #   RESULTS_DIR, CACHE_DIR  override bench/results/$MACHINE, bench/cache/liggghts
 #   KEEP_LOGS        directory to keep the LIGGGHTS logs and time -v output in
@@ -25,9 +27,8 @@
 # and cpu_pct_min (lowest "Percent of CPU this job got" over the ranks, from
 # /usr/bin/time -v).  A run is marked contended when cpu_busy_before or
 # others_busy_during > QUIET_BUSY, or cpu_pct_min < 90: on a shared 2-core
-# machine such runs are not representative (even a 1-rank run slows down
-# when the other core is busy); the summary medians use only uncontended
-# runs when there are any.
+# machine such runs are not representative; the summary medians use only
+# uncontended runs when there are any.
 #
 # Output: one JSON line per run and one summary JSON line (medians) per rank
 # count on stdout; CSV in bench/results/$MACHINE/liggghts_settle.csv.
@@ -104,7 +105,9 @@ MPIRUN=(mpirun)
 mkdir -p "$CACHE" "$RESDIR"
 # Resolve the bed's path before leaving the caller's folder.
 if [ $# -ge 1 ]; then BED_ARG=$(cd "$(dirname "$1")" && pwd)/$(basename "$1"); fi
-cd "$HERE"     # in.bench / in.make_bed include in.material and in.walls
+# LIGGGHTS runs in scratch folders (it may drop restart_forced_*.data files
+# into its working folder when it is killed); -var dir tells the inputs where
+# in.material and in.walls are.
 
 # ---------------------------------------------------------------- the bed --
 if [ $# -ge 1 ]; then
@@ -118,11 +121,20 @@ else
     BED_NAME="liggghts_make_bed"
     if [ "$REMAKE_BED" = 1 ] || [ ! -s "$DATA" ]; then
         log "making the bed with in.make_bed on $MAKE_RANKS ranks (takes minutes)"
+        MAKEDIR=$(mktemp -d "${TMPDIR:-/tmp}/liggghts_make_bed.XXXXXX")
         t0=$(date +%s.%N)
-        "${MPIRUN[@]}" -np "$MAKE_RANKS" liggghts -nocite -in in.make_bed \
-            -var out "$DATA.tmp" -log "$CACHE/make_bed.log" -screen none
+        if ! ( cd "$MAKEDIR" && "${MPIRUN[@]}" -np "$MAKE_RANKS" liggghts -nocite \
+                 -in "$HERE/in.make_bed" -var dir "$HERE" -var out "$MAKEDIR/bed.data" ${MAKE_VARS:-} \
+                 -log "$MAKEDIR/make_bed.log" -screen none ); then
+            mkdir -p "$CACHE"; cp "$MAKEDIR/make_bed.log" "$CACHE/make_bed.failed.log" 2>/dev/null || true
+            rm -rf "$MAKEDIR"
+            log "in.make_bed failed, see $CACHE/make_bed.failed.log"; exit 1
+        fi
         t1=$(date +%s.%N)
-        mv "$DATA.tmp" "$DATA"
+        mkdir -p "$CACHE"
+        cp "$MAKEDIR/make_bed.log" "$CACHE/make_bed.log"
+        mv "$MAKEDIR/bed.data" "$DATA"
+        rm -rf "$MAKEDIR"
         MAKE_S=$(awk -v a="$t0" -v b="$t1" 'BEGIN{printf "%.1f", b-a}')
         echo "$MAKE_S" > "$CACHE/make_bed.wall_s"
         log "bed made in $MAKE_S s wall: $(grep 'make_bed: done' "$CACHE/make_bed.log" | tail -1)"
@@ -147,10 +159,10 @@ for R in $RANKS; do
         busy=$(wait_quiet)
         b0=$(busy_ticks); t0=$(date +%s.%N)
         # one /usr/bin/time per rank -> peak RSS of every rank
-        "${MPIRUN[@]}" -np "$R" sh -c \
+        ( cd "$d" && "${MPIRUN[@]}" -np "$R" sh -c \
             'exec /usr/bin/time -v -o "$0/time.${OMPI_COMM_WORLD_RANK:-0}" liggghts -nocite "$@"' "$d" \
-            -in in.bench -var data "$DATA" -var nsteps "$NSTEPS" \
-            -log "$d/log.liggghts" -screen none
+            -in "$HERE/in.bench" -var dir "$HERE" -var data "$DATA" -var nsteps "$NSTEPS" \
+            -log "$d/log.liggghts" -screen none )
         b1=$(busy_ticks); t1=$(date +%s.%N)
         # CPU used by other processes during the run: machine busy time minus
         # this run's own user+sys time (all ranks), as a fraction of all CPUs
