@@ -89,3 +89,57 @@ TEST(DeterminismTest, StateHashIndependentOfThreadCount) {
 
 }  // namespace
 }  // namespace dem
+
+namespace dem {
+namespace {
+
+SystemConfig TwoSphereConfig() {
+  SystemConfig c;
+  c.gravity = Vec3{0, 0, 0};
+  c.time_step = 0.2 * RayleighTimeStep(kRadius, test::Snow());
+  c.skin = 0.5 * kRadius;
+  c.domain_min = Vec3{-0.02, -0.02, -0.02};
+  c.domain_max = Vec3{0.02, 0.02, 0.02};
+  c.max_speed = 10.0;
+  c.max_overlap_fraction = 0.05;
+  return c;
+}
+
+// Health checks (STYLE.md habit 8): each bad state is reported with the offending particle's
+// persistent id, the time and the scene knob to turn.
+TEST(HealthTest, ReportsOverlapSpeedAndNonFiniteState) {
+  const Interaction law{0.5, 0.5, 0.0};
+  {  // Two spheres placed 20% of a diameter into each other.
+    System s(test::SnowAndSteel(law, law), TwoSphereConfig());
+    s.set_num_threads(1);
+    s.AddParticle({0, 0, 0}, {}, {}, kRadius, 0);
+    s.AddParticle({1.6 * kRadius, 0, 0}, {}, {}, kRadius, 0);
+    const StepStatus st = s.Step();
+    EXPECT_TRUE(st.flags & kExcessiveOverlap);
+    EXPECT_EQ(st.particle, 0);
+    EXPECT_NE(st.message.find("rayleigh_fraction"), std::string::npos) << st.message;
+    EXPECT_NE(st.message.find("t = "), std::string::npos) << st.message;
+  }
+  {  // A sphere thrown at 50 m/s with a 10 m/s runaway limit.
+    System s(test::SnowAndSteel(law, law), TwoSphereConfig());
+    s.set_num_threads(1);
+    s.AddParticle({0, 0, 0}, {}, {}, kRadius, 0);
+    s.AddParticle({0.01, 0, 0}, {50, 0, 0}, {}, kRadius, 0);
+    const StepStatus st = s.Step();
+    EXPECT_TRUE(st.flags & kRunawaySpeed);
+    EXPECT_EQ(st.particle, 1);
+    EXPECT_NE(st.message.find("particle 1 moves at 50"), std::string::npos) << st.message;
+  }
+  {  // A NaN velocity.
+    System s(test::SnowAndSteel(law, law), TwoSphereConfig());
+    s.set_num_threads(1);
+    s.AddParticle({0, 0, 0}, {std::nan(""), 0, 0}, {}, kRadius, 0);
+    const StepStatus st = s.Step();
+    EXPECT_TRUE(st.flags & kNonFinite);
+    EXPECT_EQ(st.particle, 0);
+    EXPECT_NE(st.message.find("non-finite"), std::string::npos) << st.message;
+  }
+}
+
+}  // namespace
+}  // namespace dem
