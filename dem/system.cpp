@@ -51,6 +51,14 @@ struct System::ContactBatch {
   }
 };
 
+// Stores a vector into three structure-of-arrays columns at entry b.
+inline void Put(std::vector<double>& cx, std::vector<double>& cy, std::vector<double>& cz, size_t b,
+                const Vec3& a) {
+  cx[b] = a.x;
+  cy[b] = a.y;
+  cz[b] = a.z;
+}
+
 // Private state of the System: contact constants, neighbour list, contact history.
 struct System::Impl {
   std::vector<PairConstants> pair;  // material pair constants (nm x nm)
@@ -495,30 +503,15 @@ void System::ComputeForces() {
             batch.pair[b] = pair;
             uniform = uniform && pair == batch.pair[0];
             const double ri = radius[i], rj = radius[j];
-            const Vec3 d = x[j] - x[i];
-            batch.dx[b] = d.x;
-            batch.dy[b] = d.y;
-            batch.dz[b] = d.z;
-            const Vec3 dv = v[j] - v[i];
-            batch.dvx[b] = dv.x;
-            batch.dvy[b] = dv.y;
-            batch.dvz[b] = dv.z;
-            const Vec3 a = ri * w[i] + rj * w[j];
-            batch.ax[b] = a.x;
-            batch.ay[b] = a.y;
-            batch.az[b] = a.z;
-            const Vec3 wr = w[i] - w[j];
-            batch.wx[b] = wr.x;
-            batch.wy[b] = wr.y;
-            batch.wz[b] = wr.z;
+            Put(batch.dx, batch.dy, batch.dz, b, x[j] - x[i]);
+            Put(batch.dvx, batch.dvy, batch.dvz, b, v[j] - v[i]);
+            Put(batch.ax, batch.ay, batch.az, b, ri * w[i] + rj * w[j]);
+            Put(batch.wx, batch.wy, batch.wz, b, w[i] - w[j]);
             batch.ri[b] = ri;
             batch.rj[b] = rj;
             batch.inv_m_star[b] = inv_mass[i] + inv_mass[j];
             batch.inv_inertia[b] = inv_inertia[i] + inv_inertia[j];
-            const double keep = batch.was[b] ? 1.0 : 0.0;
-            batch.sx[b] = keep * shear[k].x;
-            batch.sy[b] = keep * shear[k].y;
-            batch.sz[b] = keep * shear[k].z;
+            Put(batch.sx, batch.sy, batch.sz, b, (batch.was[b] ? 1.0 : 0.0) * shear[k]);
           }
           // Material constants: one broadcast when the batch holds one material pair (the
           // common case), else per contact.
