@@ -39,7 +39,7 @@ void ReportUnstable(const dem::StepStatus& status) {
   std::fprintf(stderr, "scoopsim: simulation unstable: %s\n", status.message.c_str());
 }
 
-// Pours and settles the scene's bed into `system`, with progress on stderr.
+// Fills and settles the scene's bed into `system`, with progress on stderr.
 SettleReport Pour(const Scene& scene, dem::System* system, bool quiet) {
   Progress progress("bed", scene.bed.settle_max_time, quiet);
   const double t0 = system->time();
@@ -76,6 +76,15 @@ int CheckSettled(const Scene& scene, const SettleReport& r, const dem::System& s
   return 0;
 }
 
+// Pours the bed, says what went wrong if anything did, and on success (or a bed that merely did
+// not settle in time) canonicalizes the storage, ready to save or run. Returns the exit status.
+int PourBed(const Scene& scene, dem::System* system, bool quiet, SettleReport* report) {
+  *report = Pour(scene, system, quiet);
+  const int status = CheckSettled(scene, *report, *system);
+  if (status == 0 || status == kExitNotSettled) system->Canonicalize();
+  return status;
+}
+
 double PeakRssMb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -88,10 +97,9 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
   InstallStopHandlers();
   auto system = MakeSystem(scene, options.threads);
   const auto wall0 = std::chrono::steady_clock::now();
-  const SettleReport r = Pour(scene, system.get(), options.quiet);
-  const int status = CheckSettled(scene, r, *system);
+  SettleReport r;
+  const int status = PourBed(scene, system.get(), options.quiet, &r);
   if (status != 0 && status != kExitNotSettled) return status;
-  system->Canonicalize();
   SaveBed(options.output, *system, scene.yaml_text);
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -109,10 +117,9 @@ int RunScene(const Scene& scene, const RunOptions& options) {
     LoadBed(ResolveBedPath(scene), system.get());
     system->Canonicalize();
   } else {
-    const SettleReport r = Pour(scene, system.get(), options.quiet);
-    const int status = CheckSettled(scene, r, *system);
+    SettleReport r;
+    const int status = PourBed(scene, system.get(), options.quiet, &r);
     if (status != 0) return status;
-    system->Canonicalize();
   }
 
   H5Output out(options.output, scene.yaml_text, SCOOPSIM_VERSION, scene.output.flush_seconds);
@@ -195,16 +202,15 @@ int BenchSettle(const BenchSettleOptions& options) {
   auto system = MakeSystem(scene, options.threads);
   if (fs::exists(bed_path)) {
     LoadBed(bed_path, system.get());
+    system->Canonicalize();
   } else {
     std::fprintf(stderr, "scoopsim bench: preparing %s (once)\n", bed_path.c_str());
     InstallStopHandlers();
-    const SettleReport rep = Pour(scene, system.get(), false);
-    const int status = CheckSettled(scene, rep, *system);
+    SettleReport r;
+    const int status = PourBed(scene, system.get(), false, &r);
     if (status != 0 && status != kExitNotSettled) return status;
-    system->Canonicalize();
     SaveBed(bed_path, *system, scene.yaml_text);
   }
-  system->Canonicalize();
   const int64_t n = static_cast<int64_t>(system->particles().size());
   const auto t0 = std::chrono::steady_clock::now();
   for (int64_t k = 0; k < options.steps; ++k) {

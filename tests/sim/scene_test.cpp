@@ -59,6 +59,19 @@ std::string WriteFile(const std::string& name, const std::string& text) {
 // ---------------------------------------------------------------------------------------------
 // (a) Shipped scenes and materials.
 
+// A materials file with snow and a wall; `wall_pair` spells the snow-wall pair ("[snow, wall]"
+// or "[wall, snow]": either order must serve both).
+void WriteSnowWallMaterials(const std::string& name, const std::string& wall_pair) {
+  WriteFile(name, std::string(R"(materials:
+  snow: {density: 300, shear_modulus: 1.0e7, poisson: 0.36}
+  wall: {density: 7850, shear_modulus: 7.9e10, poisson: 0.3}
+interactions:
+  - {pair: [snow, snow], restitution: 0.88, friction: 0.58, rolling_friction: 0.05}
+  - {pair: )") + wall_pair +
+                      R"(, restitution: 0.7, friction: 0.58, rolling_friction: 0.05}
+)");
+}
+
 TEST(SceneTest, ShippedScenesLoadWithRayleighTimeStep) {
   struct Expected {
     const char* file;
@@ -101,13 +114,7 @@ TEST(SceneTest, BenchSettleSceneMatchesTheBenchmarkSpec) {
 }
 
 TEST(SceneTest, DefaultsApplyWhenOptionalKeysAreLeftOut) {
-  WriteFile("defaults_mats.yaml", R"(materials:
-  snow: {density: 300, shear_modulus: 1.0e7, poisson: 0.36}
-  wall: {density: 7850, shear_modulus: 7.9e10, poisson: 0.3}
-interactions:
-  - {pair: [snow, snow], restitution: 0.88, friction: 0.58, rolling_friction: 0.05}
-  - {pair: [wall, snow], restitution: 0.7, friction: 0.58, rolling_friction: 0.05}
-)");
+  WriteSnowWallMaterials("defaults_mats.yaml", "[wall, snow]");
   const std::string path = WriteFile("defaults.yaml", R"(materials: defaults_mats.yaml
 gravity: [0, 0, -9.81]
 box: {min: [0, 0, 0], max: [0.05, 0.05, 0.08], wall_material: wall}
@@ -133,13 +140,7 @@ bed: {material: snow, radius: [1.0e-3, 2.0e-3], count: 100}
 }
 
 TEST(SceneTest, BedFileIsResolvedAgainstTheScenesFolder) {
-  WriteFile("bedfile_mats.yaml", R"(materials:
-  snow: {density: 300, shear_modulus: 1.0e7, poisson: 0.36}
-  wall: {density: 7850, shear_modulus: 7.9e10, poisson: 0.3}
-interactions:
-  - {pair: [snow, snow], restitution: 0.88, friction: 0.58, rolling_friction: 0.05}
-  - {pair: [snow, wall], restitution: 0.7, friction: 0.58, rolling_friction: 0.05}
-)");
+  WriteSnowWallMaterials("bedfile_mats.yaml", "[snow, wall]");
   const std::string path = WriteFile("bedfile.yaml", R"(materials: bedfile_mats.yaml
 gravity: [0, 0, -1.3]
 box: {min: [0, 0, 0], max: [0.05, 0.05, 0.08], wall_material: wall}
