@@ -5,6 +5,7 @@
 #include <string>
 
 #include "sim/scene.h"
+#include "sim/world_view.h"
 
 namespace sim {
 
@@ -12,6 +13,10 @@ struct RunOptions {
   int threads = 0;     // 0 = all cores
   std::string output;  // output HDF5 path
   bool quiet = false;  // no progress output
+  // Frames: when set, RunScene calls on_frame at t0 and then every frame_every simulated seconds
+  // (0 = at every output interval), from the main thread, with no OpenMP region active.
+  FrameCallback on_frame;
+  double frame_every = 0;  // [s]
 };
 
 // `scoopsim bed SCENE -o BED.h5`: fill the scene's box, settle, save the bed.
