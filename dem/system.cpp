@@ -10,6 +10,7 @@
 
 #include "dem/contact.h"
 #include "dem/neighbor.h"
+#include "dem/triangle.h"
 
 namespace dem {
 
@@ -83,15 +84,49 @@ struct System::Impl {
   std::vector<Vec3> wall_shear;        // tangential history [m]
   std::vector<Vec3> slab_plane_force;  // force on each plane from each slab [N] (slabs x planes)
 
+  // Triangle meshes and their contacts (see MeshForces).
+  struct MeshHistory {
+    int32_t index;  // particle storage index
+    int64_t id;     // particle persistent id
+    Vec3 normal;    // contact normal (particle -> mesh) when the history was stored
+    Vec3 shear;     // tangential history [m]
+  };
+  struct MeshState {
+    TriangleMesh mesh;
+    MeshMotion motion;
+    std::vector<PairConstants> constants;  // per particle material (nm)
+    std::vector<Vec3> world;               // vertices in world at `motion` [m] (V)
+    double reach = 0;                      // largest vertex distance from the body origin [m]
+    // Candidates: (particle, triangle) pairs within r + skin at the last candidate build, grouped
+    // by particle in storage order: group g is particle group_particle[g], triangles
+    // cand_tri[group_start[g] .. group_start[g + 1]].
+    std::vector<int32_t> group_particle, group_start, cand_tri;
+    bool candidates_valid = false;
+    Pose pose_build;            // mesh pose at the candidate build
+    double particle_drift = 0;  // bound on particle displacement since the candidate build [m]
+    std::vector<MeshHistory> history;  // sorted by particle storage index
+    // Per-group results of the parallel pass, summed serially in group order.
+    std::vector<Vec3> group_force, group_torque, group_mesh_torque;
+    std::vector<int32_t> group_history, group_new;  // history range start; new contacts count
+    std::vector<MeshHistory> fresh;                 // new history, up to 4 slots per group
+    MeshWrench wrench;
+  };
+  std::vector<MeshState> meshes;
+  int64_t mesh_contacts = 0;
+  int64_t awake = 0;
+  int64_t sleep_counter = 0;  // steps since the last sleep check
+
   std::vector<ContactBatch> batches;  // one per thread
   size_t batch_capacity = 0;
 
   std::vector<ContactRecord> pending;  // history to apply at the next build
+  std::vector<ContactRecord> dormant;  // history of contacts between two sleeping particles
   std::vector<int32_t> perm, visit, index_of_id;
   std::vector<double> scratch_d;
   std::vector<int64_t> scratch_i64;
   std::vector<int32_t> scratch_i32;
   std::vector<Vec3> scratch_v;
+  std::vector<uint8_t> scratch_wake;
 
   // Per-slab reductions of the force pass (fixed slots, so results do not depend on threads).
   std::vector<double> slab_overlap;  // largest overlap / smaller diameter
@@ -136,6 +171,7 @@ void System::Reserve(size_t n) {
   p_.inv_mass.reserve(n);
   p_.inv_inertia.reserve(n);
   p_.material.reserve(n);
+  p_.awake.reserve(n);
 }
 
 int64_t System::AddParticle(const Vec3& x, const Vec3& v, const Vec3& w, double radius,
@@ -153,6 +189,7 @@ int64_t System::AddParticle(const Vec3& x, const Vec3& v, const Vec3& w, double 
   p_.inv_mass.push_back(1.0 / mass);
   p_.inv_inertia.push_back(1.0 / (0.4 * mass * radius * radius));
   p_.material.push_back(material);
+  p_.awake.push_back(1);
   impl_->needs_rebuild = true;  // existing list indices stay valid: new particles come last
   return id;
 }
@@ -179,6 +216,7 @@ void System::RemoveParticles(const std::vector<int64_t>& ids) {
     p_.inv_mass[out] = p_.inv_mass[i];
     p_.inv_inertia[out] = p_.inv_inertia[i];
     p_.material[out] = p_.material[i];
+    p_.awake[out] = p_.awake[i];
     ++out;
   }
   p_.id.resize(out);
@@ -192,7 +230,15 @@ void System::RemoveParticles(const std::vector<int64_t>& ids) {
   p_.inv_mass.resize(out);
   p_.inv_inertia.resize(out);
   p_.material.resize(out);
+  p_.awake.resize(out);
+  for (Impl::MeshState& ms : impl_->meshes) {
+    size_t kept = 0;
+    for (const Impl::MeshHistory& h : ms.history)
+      if (!gone[h.id]) ms.history[kept++] = h;
+    ms.history.resize(kept);
+  }
   impl_->pending = std::move(keep);
+  impl_->dormant.clear();
   impl_->list_valid = false;
   impl_->needs_rebuild = true;
 }
@@ -205,6 +251,8 @@ NeighborStats System::neighbor_stats() const {
   s.pairs = static_cast<int64_t>(impl_->list.num_pairs());
   s.contacts = impl_->contacts;
   s.wall_contacts = impl_->wall_contacts;
+  s.mesh_contacts = impl_->mesh_contacts;
+  s.awake = config_.sleep.enabled ? impl_->awake : static_cast<int64_t>(p_.size());
   return s;
 }
 
@@ -234,6 +282,7 @@ std::vector<ContactRecord> System::Contacts() const {
             {p_.id[m.wall_i[e]], -1 - static_cast<int64_t>(m.wall_k[e]), m.wall_shear[e]});
   }
   out.insert(out.end(), m.pending.begin(), m.pending.end());
+  out.insert(out.end(), m.dormant.begin(), m.dormant.end());
   std::sort(out.begin(), out.end(), [](const ContactRecord& l, const ContactRecord& r) {
     return l.a != r.a ? l.a < r.a : l.b < r.b;
   });
@@ -243,6 +292,7 @@ std::vector<ContactRecord> System::Contacts() const {
 void System::SetContacts(const std::vector<ContactRecord>& contacts) {
   // Replaces all history: the next build takes it from these records only.
   impl_->pending = contacts;
+  impl_->dormant.clear();
   impl_->list_valid = false;
   impl_->needs_rebuild = true;
 }
@@ -252,8 +302,9 @@ void System::Rebuild() {
   const size_t n = p_.size();
   // 1. Keep the history of the current contacts by persistent id.
   if (m.list_valid) {
-    std::vector<ContactRecord> records = Contacts();  // includes pending
+    std::vector<ContactRecord> records = Contacts();  // includes pending and dormant
     m.pending.swap(records);
+    m.dormant.clear();
   }
   // 2. Grid sized for the present particles; reorder storage by cell, ties by persistent id.
   // The grid spans the particles' bounding box (within the domain), so that every slab holds
@@ -292,10 +343,44 @@ void System::Rebuild() {
   Permute(p_.inv_mass, m.perm, m.scratch_d);
   Permute(p_.inv_inertia, m.perm, m.scratch_d);
   Permute(p_.material, m.perm, m.scratch_i32);
+  {
+    std::vector<uint8_t> a(n);
+    for (size_t i = 0; i < n; ++i) a[i] = p_.awake[m.perm[i]];
+    p_.awake.swap(a);
+  }
   for (size_t i = 0; i < n; ++i) m.index_of_id[p_.id[i]] = static_cast<int32_t>(i);
+  // Mesh contact history follows its particles; candidates are found again at the next step.
+  for (Impl::MeshState& ms : m.meshes) {
+    size_t kept = 0;
+    for (Impl::MeshHistory& h : ms.history) {
+      if (h.id >= next_id_ || m.index_of_id[h.id] < 0) continue;
+      h.index = m.index_of_id[h.id];
+      ms.history[kept++] = h;
+    }
+    ms.history.resize(kept);
+    std::stable_sort(ms.history.begin(), ms.history.end(),
+                     [](const Impl::MeshHistory& l, const Impl::MeshHistory& r) {
+                       return l.index < r.index;
+                     });
+    ms.candidates_valid = false;
+  }
 
   // 3. Particle pairs and particle-plane candidates within reach (+ skin).
   m.list.Build(p_.x.data(), p_.radius.data(), n, m.skin, num_threads_);
+  // Two sleeping particles never interact: drop their pairs (the list stays sorted by owner).
+  if (config_.sleep.enabled) {
+    int32_t out = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const int32_t begin = m.list.start[i], end = m.list.start[i + 1];
+      m.list.start[i] = out;
+      for (int32_t k = begin; k < end; ++k) {
+        const int32_t j = m.list.partner[k];
+        if (p_.awake[i] || p_.awake[j]) m.list.partner[out++] = j;
+      }
+    }
+    m.list.start[n] = out;
+    m.list.partner.resize(out);
+  }
   m.shear.assign(m.list.num_pairs(), Vec3{});
   m.touching.assign(m.list.num_pairs(), 0);
   int32_t longest = 0;
@@ -306,6 +391,7 @@ void System::Rebuild() {
   m.wall_start.resize(n + 1);
   for (size_t i = 0; i < n; ++i) {
     m.wall_start[i] = static_cast<int32_t>(m.wall_i.size());
+    if (!p_.awake[i]) continue;  // a sleeping particle does not move: no wall contact to compute
     for (size_t k = 0; k < config_.planes.size(); ++k) {
       const Plane& pl = config_.planes[k];
       if (Dot(p_.x[i] - pl.point, pl.normal) < p_.radius[i] + m.skin) {
@@ -318,6 +404,8 @@ void System::Rebuild() {
   m.wall_shear.assign(m.wall_i.size(), Vec3{});
 
   // 4. Put the kept history back on the new entries (sign flips if the pair's owner changed).
+  //    History between two sleeping particles is kept aside until one of them wakes.
+  m.dormant.clear();
   for (const ContactRecord& c : m.pending) {
     if (c.a < 0 || c.a >= next_id_) continue;
     const int32_t ia = m.index_of_id[c.a];
@@ -326,6 +414,10 @@ void System::Rebuild() {
       if (c.b >= next_id_ || m.index_of_id[c.b] < 0) continue;
       const int32_t ib = m.index_of_id[c.b];
       const int32_t owner = std::min(ia, ib), other = std::max(ia, ib);
+      if (!p_.awake[ia] && !p_.awake[ib]) {
+        m.dormant.push_back(c);
+        continue;
+      }
       for (int32_t k = m.list.start[owner]; k < m.list.start[owner + 1]; ++k)
         if (m.list.partner[k] == other) {
           m.shear[k] = owner == ia ? c.shear : -c.shear;
@@ -333,6 +425,10 @@ void System::Rebuild() {
           break;
         }
     } else {
+      if (!p_.awake[ia]) {
+        m.dormant.push_back(c);
+        continue;
+      }
       const int32_t plane = static_cast<int32_t>(-1 - c.b);
       for (int32_t e = m.wall_start[ia]; e < m.wall_start[ia + 1]; ++e)
         if (m.wall_k[e] == plane) m.wall_shear[e] = c.shear;
@@ -607,11 +703,14 @@ StepStatus System::Step() {
 
   // Velocity Verlet (LIGGGHTS fix nve/sphere; Allen & Tildesley eq. 3.19): half kick, drift.
   double max_v2 = 0;
+  const uint8_t* awake = p_.awake.data();
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : max_v2)
   for (size_t i = 0; i < n; ++i) {
-    v[i] += (h * inv_mass[i]) * f[i];
-    w[i] += (h * inv_inertia[i]) * t[i];
-    x[i] += dt * v[i];
+    if (awake[i]) {
+      v[i] += (h * inv_mass[i]) * f[i];
+      w[i] += (h * inv_inertia[i]) * t[i];
+      x[i] += dt * v[i];
+    }
     max_v2 = std::max(max_v2, Norm2(v[i]));
     // Start this step's force with gravity (contacts add to it in ComputeForces).
     f[i] = mass[i] * g;
@@ -632,9 +731,11 @@ StepStatus System::Step() {
     m.drift_bound = std::sqrt(max_disp2);
     rebuild = !(m.drift_bound <= half_skin);  // also on NaN
   }
+  for (Impl::MeshState& ms : m.meshes) ms.particle_drift += dt * std::sqrt(max_v2);
   if (rebuild) Rebuild();
 
   ComputeForces();
+  if (!m.meshes.empty()) MeshForces();
 
   // Second half kick, with health checks.
   v = p_.v.data();
@@ -643,6 +744,7 @@ StepStatus System::Step() {
   t = p_.t.data();
   inv_mass = p_.inv_mass.data();
   inv_inertia = p_.inv_inertia.data();
+  awake = p_.awake.data();
   max_v2 = 0;
   int bad = 0;
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max       \
@@ -650,6 +752,7 @@ StepStatus System::Step() {
     reduction(|                                                                         \
               : bad)
   for (size_t i = 0; i < n; ++i) {
+    if (!awake[i]) continue;
     v[i] += (h * inv_mass[i]) * f[i];
     w[i] += (h * inv_inertia[i]) * t[i];
     const double v2 = Norm2(v[i]);
@@ -659,6 +762,10 @@ StepStatus System::Step() {
   }
   time_ += dt;
   ++step_count_;
+  if (config_.sleep.enabled && ++m.sleep_counter >= config_.sleep.check_every) {
+    m.sleep_counter = 0;
+    UpdateSleep();
+  }
 
   StepStatus status;
   if (bad) status.flags |= kNonFinite;
@@ -666,6 +773,324 @@ StepStatus System::Step() {
   if (m.max_overlap > config_.max_overlap_fraction) status.flags |= kExcessiveOverlap;
   if (!status.ok()) Diagnose(&status);
   return status;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Triangle-mesh walls.
+
+int System::AddMesh(TriangleMesh mesh) {
+  Impl& m = *impl_;
+  Impl::MeshState ms;
+  const int nm = materials_.size();
+  ms.constants.resize(nm);
+  for (int a = 0; a < nm; ++a)
+    ms.constants[a] = MakePairConstants(materials_[a], materials_[mesh.material],
+                                        materials_.interaction(a, mesh.material));
+  for (const Vec3& v : mesh.vertices) ms.reach = std::max(ms.reach, Norm(v));
+  ms.world = mesh.vertices;
+  ms.mesh = std::move(mesh);
+  m.meshes.push_back(std::move(ms));
+  return static_cast<int>(m.meshes.size()) - 1;
+}
+
+int System::num_meshes() const { return static_cast<int>(impl_->meshes.size()); }
+const TriangleMesh& System::mesh(int k) const { return impl_->meshes[k].mesh; }
+const MeshMotion& System::mesh_motion(int k) const { return impl_->meshes[k].motion; }
+MeshWrench System::mesh_wrench(int k) const { return impl_->meshes[k].wrench; }
+
+void System::SetMeshMotion(int k, const MeshMotion& motion) {
+  Impl::MeshState& ms = impl_->meshes[k];
+  ms.motion = motion;
+  const Pose& pose = motion.pose;
+  for (size_t a = 0; a < ms.mesh.vertices.size(); ++a)
+    ms.world[a] = Apply(pose, ms.mesh.vertices[a]);
+}
+
+// Candidates of mesh k: every (particle, triangle) pair closer than r + skin now. They stay valid
+// while the mesh's largest vertex displacement plus the particles' largest displacement since
+// the build stays below the skin (checked in MeshForces).
+void System::BuildMeshCandidates(int k) {
+  Impl& m = *impl_;
+  Impl::MeshState& ms = m.meshes[k];
+  const size_t n = p_.size();
+  const auto& tris = ms.mesh.triangles;
+  const size_t nt = tris.size();
+  // World bounding boxes of the triangles and of the whole mesh.
+  std::vector<Vec3>& lo = m.scratch_v;
+  lo.resize(2 * nt);
+  Vec3 mlo{1e300, 1e300, 1e300}, mhi{-1e300, -1e300, -1e300};
+  for (size_t e = 0; e < nt; ++e) {
+    const Vec3 &a = ms.world[tris[e][0]], &b = ms.world[tris[e][1]], &c = ms.world[tris[e][2]];
+    const Vec3 tlo{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}),
+                   std::min({a.z, b.z, c.z})};
+    const Vec3 thi{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}),
+                   std::max({a.z, b.z, c.z})};
+    lo[2 * e] = tlo;
+    lo[2 * e + 1] = thi;
+    mlo = {std::min(mlo.x, tlo.x), std::min(mlo.y, tlo.y), std::min(mlo.z, tlo.z)};
+    mhi = {std::max(mhi.x, thi.x), std::max(mhi.y, thi.y), std::max(mhi.z, thi.z)};
+  }
+  ms.group_particle.clear();
+  ms.group_start.clear();
+  ms.cand_tri.clear();
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 c = p_.x[i];
+    const double reach = p_.radius[i] + m.skin;
+    if (c.x < mlo.x - reach || c.x > mhi.x + reach || c.y < mlo.y - reach ||
+        c.y > mhi.y + reach || c.z < mlo.z - reach || c.z > mhi.z + reach)
+      continue;
+    const size_t first = ms.cand_tri.size();
+    for (size_t e = 0; e < nt; ++e) {
+      const Vec3 &tlo = lo[2 * e], &thi = lo[2 * e + 1];
+      if (c.x < tlo.x - reach || c.x > thi.x + reach || c.y < tlo.y - reach ||
+          c.y > thi.y + reach || c.z < tlo.z - reach || c.z > thi.z + reach)
+        continue;
+      const ClosestPoint cp = ClosestPointOnTriangle(c, ms.world[tris[e][0]],
+                                                     ms.world[tris[e][1]], ms.world[tris[e][2]]);
+      if (Norm2(c - cp.point) < reach * reach) ms.cand_tri.push_back(static_cast<int32_t>(e));
+    }
+    if (ms.cand_tri.size() > first) {
+      ms.group_particle.push_back(static_cast<int32_t>(i));
+      ms.group_start.push_back(static_cast<int32_t>(first));
+    }
+  }
+  ms.group_start.push_back(static_cast<int32_t>(ms.cand_tri.size()));
+  ms.pose_build = ms.motion.pose;
+  ms.particle_drift = 0;
+  ms.candidates_valid = true;
+}
+
+// Particle-mesh contacts (Hertz-Mindlin, dem/contact.h, with the particle-mesh interaction; the
+// mesh is rigid and kinematic, so R* = r and m* = m). A sphere may touch several triangles; to
+// count a flat region, a shared edge or a shared vertex once, the touching triangles are taken
+// nearest first and a further one is kept only if its closest point lies strictly above the
+// tangent plane of every contact kept so far. On a flat or convex patch all closest points lie
+// in (or below) that plane and only the nearest counts; in a concave corner the second face
+// rises above it and is a second, genuine contact.
+void System::MeshForces() {
+  Impl& m = *impl_;
+  const double dt = config_.time_step;
+  constexpr int kMaxHits = 16, kMaxContacts = 4;
+  int64_t total = 0;
+  double worst_overlap = 0;
+  for (int k = 0; k < static_cast<int>(m.meshes.size()); ++k) {
+    Impl::MeshState& ms = m.meshes[k];
+    const Pose& pose = ms.motion.pose;
+    if (ms.candidates_valid) {
+      const Quat dq = pose.orientation * Conjugate(ms.pose_build.orientation);
+      const double angle =
+          2.0 * std::atan2(std::sqrt(dq.x * dq.x + dq.y * dq.y + dq.z * dq.z), std::abs(dq.w));
+      const double moved = Norm(pose.position - ms.pose_build.position) + angle * ms.reach;
+      if (!(moved + ms.particle_drift < 0.9 * m.skin)) ms.candidates_valid = false;
+    }
+    if (!ms.candidates_valid) BuildMeshCandidates(k);
+
+    const int ng = static_cast<int>(ms.group_particle.size());
+    ms.group_force.resize(ng);
+    ms.group_torque.resize(ng);
+    ms.group_mesh_torque.resize(ng);
+    ms.group_new.assign(ng, 0);
+    ms.group_history.resize(ng + 1);
+    ms.fresh.resize(static_cast<size_t>(kMaxContacts) * ng);
+    // History of each group (both lists are sorted by particle storage index).
+    size_t h = 0;
+    for (int g = 0; g < ng; ++g) {
+      while (h < ms.history.size() && ms.history[h].index < ms.group_particle[g]) ++h;
+      ms.group_history[g] = static_cast<int32_t>(h);
+    }
+    ms.group_history[ng] = static_cast<int32_t>(ms.history.size());
+
+    const Vec3 origin = pose.position, vel = ms.motion.velocity, omega = ms.motion.angular_velocity;
+    const auto& tris = ms.mesh.triangles;
+    double worst = 0;
+#pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : worst)
+    for (int g = 0; g < ng; ++g) {
+      const int32_t i = ms.group_particle[g];
+      const Vec3 c = p_.x[i];
+      const double r = p_.radius[i];
+      struct Hit {
+        double dist;
+        Vec3 point;
+        int32_t tri;
+      };
+      Hit hits[kMaxHits];
+      int nh = 0;
+      for (int32_t e = ms.group_start[g]; e < ms.group_start[g + 1] && nh < kMaxHits; ++e) {
+        const auto& t = tris[ms.cand_tri[e]];
+        const ClosestPoint cp =
+            ClosestPointOnTriangle(c, ms.world[t[0]], ms.world[t[1]], ms.world[t[2]]);
+        const double d2 = Norm2(c - cp.point);
+        if (d2 < r * r) hits[nh++] = {std::sqrt(d2), cp.point, ms.cand_tri[e]};
+      }
+      // Nearest first; ties by triangle index (deterministic).
+      std::sort(hits, hits + nh, [](const Hit& a, const Hit& b) {
+        return a.dist != b.dist ? a.dist < b.dist : a.tri < b.tri;
+      });
+      // History entries of this particle (each used once).
+      int32_t hb = ms.group_history[g], he = hb;
+      while (he < ms.group_history[ng] && ms.history[he].index == i) ++he;
+      bool used[kMaxContacts * 2] = {};
+      Vec3 fi, ti, tm;
+      Vec3 kept_point[kMaxContacts], kept_normal[kMaxContacts];
+      int nk = 0;
+      for (int a = 0; a < nh && nk < kMaxContacts; ++a) {
+        const Hit& hit = hits[a];
+        Vec3 out;  // unit normal from the mesh to the particle centre
+        if (hit.dist > 1e-9 * r) {
+          out = (1.0 / hit.dist) * (c - hit.point);
+        } else {  // centre on the surface: the face normal
+          const auto& t = tris[hit.tri];
+          const Vec3 fn = Cross(ms.world[t[1]] - ms.world[t[0]], ms.world[t[2]] - ms.world[t[0]]);
+          out = (1.0 / Norm(fn)) * fn;
+        }
+        bool covered = false;
+        for (int b = 0; b < nk; ++b)
+          covered = covered || Dot(hit.point - kept_point[b], kept_normal[b]) <= 1e-9 * r;
+        if (covered) continue;
+        const Vec3 nrm = -out;  // from the particle to the mesh
+        const double delta = r - hit.dist;
+        const Vec3 v_mesh = vel + Cross(omega, hit.point - origin);
+        const Vec3 v_rel = v_mesh - (p_.v[i] + r * Cross(p_.w[i], nrm));
+        const Vec3 w_rel = p_.w[i] - omega;
+        // Tangential history: the stored contact of this particle whose normal is closest.
+        Vec3 shear;
+        int best = -1;
+        double best_dot = 0.8;  // within ~37 degrees
+        for (int32_t e = hb; e < he && e - hb < kMaxContacts * 2; ++e) {
+          const double d = Dot(ms.history[e].normal, nrm);
+          if (!used[e - hb] && d > best_dot) {
+            best_dot = d;
+            best = e;
+          }
+        }
+        if (best >= 0) {
+          used[best - hb] = true;
+          shear = ms.history[best].shear;
+        }
+        const ContactForce cf =
+            EvaluateContact(ms.constants[p_.material[i]], nrm, delta, r, p_.mass[i], v_rel, w_rel,
+                            p_.inv_inertia[i], dt, shear);
+        const Vec3 fa = cf.ft - cf.fn * nrm;  // on the particle
+        fi += fa;
+        ti += r * Cross(nrm, cf.ft) + cf.mr;
+        tm += Cross(hit.point - origin, -fa) - cf.mr;
+        ms.fresh[static_cast<size_t>(kMaxContacts) * g + nk] = {i, p_.id[i], nrm, shear};
+        kept_point[nk] = hit.point;
+        kept_normal[nk] = out;
+        ++nk;
+        worst = std::max(worst, delta / (2.0 * r));
+      }
+      ms.group_force[g] = fi;
+      ms.group_torque[g] = ti;
+      ms.group_mesh_torque[g] = tm;
+      ms.group_new[g] = nk;
+    }
+    // Sums in group order (fixed by the data: deterministic whatever the thread count).
+    MeshWrench wrench;
+    ms.history.clear();
+    for (int g = 0; g < ng; ++g) {
+      if (ms.group_new[g] == 0) continue;
+      const int32_t i = ms.group_particle[g];
+      p_.f[i] += ms.group_force[g];
+      p_.t[i] += ms.group_torque[g];
+      wrench.force -= ms.group_force[g];
+      wrench.torque += ms.group_mesh_torque[g];
+      wrench.contacts += ms.group_new[g];
+      for (int a = 0; a < ms.group_new[g]; ++a)
+        ms.history.push_back(ms.fresh[static_cast<size_t>(kMaxContacts) * g + a]);
+      if (!p_.awake[i]) {  // a mesh touched a sleeping particle: wake it, pairs come next step
+        p_.awake[i] = 1;
+        m.needs_rebuild = true;
+      }
+    }
+    ms.wrench = wrench;
+    total += wrench.contacts;
+    worst_overlap = std::max(worst_overlap, worst);
+  }
+  m.mesh_contacts = total;
+  m.max_overlap = std::max(m.max_overlap, worst_overlap);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sleeping.
+
+void System::set_sleep(const SleepConfig& sleep) {
+  config_.sleep = sleep;
+  if (!sleep.enabled) {
+    for (uint8_t& a : p_.awake) a = 1;
+    impl_->needs_rebuild = true;
+  }
+}
+
+int64_t System::awake_count() const {
+  int64_t n = 0;
+  for (uint8_t a : p_.awake) n += a != 0;
+  return n;
+}
+
+// Sleep/wake decisions. `awake` holds 0 for a sleeping particle and 1 + q for an awake one that
+// has been quiet (slower than sleep.speed, spinning slower than speed / r) for q checks in a row.
+// Awake: in the zone around a mesh (its bounding box grown by wake_distance), or not quiet, or
+// touched by an awake particle faster than wake_speed. A particle quiet for quiet_checks checks
+// outside every zone sleeps with v = w = 0.
+void System::UpdateSleep() {
+  Impl& m = *impl_;
+  const SleepConfig& sc = config_.sleep;
+  const size_t n = p_.size();
+  if (!m.list_valid) return;
+  std::vector<uint8_t>& woken = m.scratch_wake;
+  woken.assign(n, 0);
+  const double wake2 = sc.wake_speed * sc.wake_speed;
+  for (size_t i = 0; i < n; ++i)
+    for (int32_t k = m.list.start[i]; k < m.list.start[i + 1]; ++k) {
+      if (!m.touching[k]) continue;
+      const int32_t j = m.list.partner[k];
+      if (!p_.awake[i] && p_.awake[j] && Norm2(p_.v[j]) > wake2) woken[i] = 1;
+      if (!p_.awake[j] && p_.awake[i] && Norm2(p_.v[i]) > wake2) woken[j] = 1;
+    }
+  std::vector<Vec3> zone;  // lo, hi of each mesh
+  for (const Impl::MeshState& ms : m.meshes) {
+    Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    for (const Vec3& v : ms.world) {
+      lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
+      hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+    }
+    const Vec3 d{sc.wake_distance, sc.wake_distance, sc.wake_distance};
+    zone.push_back(lo - d);
+    zone.push_back(hi + d);
+  }
+  const double quiet2 = sc.speed * sc.speed;
+  bool woke = false;
+  int64_t awake = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 c = p_.x[i];
+    bool near = false;
+    for (size_t z = 0; z < zone.size(); z += 2)
+      near = near || (c.x >= zone[z].x && c.x <= zone[z + 1].x && c.y >= zone[z].y &&
+                      c.y <= zone[z + 1].y && c.z >= zone[z].z && c.z <= zone[z + 1].z);
+    uint8_t& a = p_.awake[i];
+    if (a == 0) {
+      if (near || woken[i]) {
+        a = 1;
+        woke = true;
+      }
+    } else {
+      const double r = p_.radius[i];
+      const bool quiet = Norm2(p_.v[i]) < quiet2 && Norm2(p_.w[i]) * r * r < quiet2;
+      if (near || !quiet) {
+        a = 1;
+      } else if (a > sc.quiet_checks) {
+        a = 0;
+        p_.v[i] = Vec3{};
+        p_.w[i] = Vec3{};
+      } else {
+        ++a;
+      }
+    }
+    awake += a != 0;
+  }
+  m.awake = awake;
+  if (woke) m.needs_rebuild = true;
 }
 
 void System::Diagnose(StepStatus* status) const {

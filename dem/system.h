@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "dem/material.h"
+#include "dem/mesh.h"
 #include "dem/vec3.h"
 
 namespace dem {
@@ -19,6 +20,19 @@ struct Plane {
   int material = 0;
 };
 
+// Sleeping: particles at rest far from every mesh are frozen (not integrated; no contact between two
+// sleeping particles is computed, though a sleeping particle still pushes on awake ones) and wake
+// when a mesh comes near or a moving particle touches them. Decisions are taken every
+// `check_every` steps from the data alone, so runs stay deterministic.
+struct SleepConfig {
+  bool enabled = false;
+  double speed = 2e-3;          // a particle is quiet below this speed (and spin * radius) [m/s]
+  double wake_speed = 5e-3;     // a sleeping particle touched by one faster than this wakes [m/s]
+  double wake_distance = 0.02;  // particles this close to a mesh's bounding box stay awake [m]
+  int check_every = 20;         // steps between sleep/wake checks
+  int quiet_checks = 5;         // consecutive quiet checks before a particle falls asleep
+};
+
 struct SystemConfig {
   Vec3 gravity{0, 0, -9.81};    // [m/s^2]
   double time_step = 0;         // [s]
@@ -29,6 +43,7 @@ struct SystemConfig {
   // Health limits (Step() reports, the caller decides to stop).
   double max_speed = 100.0;            // runaway speed [m/s]; knob: time step, restitution
   double max_overlap_fraction = 0.05;  // overlap / smaller diameter; knob: time step, stiffness
+  SleepConfig sleep;
 };
 
 // Persistent state of one contact, keyed by the persistent ids of its two sides. `b` is a particle
@@ -71,6 +86,7 @@ struct Particles {
   std::vector<double> inv_mass;     // [1/kg] (N)
   std::vector<double> inv_inertia;  // 1 / (2/5 m r^2) [1/(kg m^2)] (N)
   std::vector<int32_t> material;    // index into the MaterialTable (N)
+  std::vector<uint8_t> awake;       // 1 = integrated, 0 = sleeping (SleepConfig) (N)
   size_t size() const { return id.size(); }
 };
 
@@ -79,6 +95,16 @@ struct NeighborStats {
   int64_t pairs = 0;          // half-list pairs (within cutoff + skin) at the last build
   int64_t contacts = 0;       // particle-particle pairs in contact after the last step
   int64_t wall_contacts = 0;  // particle-plane contacts after the last step
+  int64_t mesh_contacts = 0;  // particle-mesh contacts after the last step (after deduplication)
+  int64_t awake = 0;          // particles awake (integrated) at the last step
+};
+
+// Wrench of the particles on a mesh during the last step, world frame.
+struct MeshWrench {
+  Vec3 force;   // sum of the contact forces on the mesh [N]
+  Vec3 torque;  // sum of (contact point - body origin) x force + rolling couples [N m], about the
+                // mesh body origin (MeshMotion::pose.position) at the last step
+  int64_t contacts = 0;
 };
 
 class System {
@@ -112,6 +138,21 @@ class System {
   // Force exerted by the particles on plane k during the last step [N].
   Vec3 plane_force(int k) const { return plane_force_[k]; }
 
+  // Triangle-mesh walls moved kinematically (the scoop). Contacts use the Hertz-Mindlin law with
+  // the (particle material, mesh material) interaction and keep tangential history per contact.
+  int AddMesh(TriangleMesh mesh);  // returns the mesh index
+  int num_meshes() const;
+  const TriangleMesh& mesh(int k) const;
+  // Pose and twist of mesh k at the end of the coming step (time() + time_step), when Step()
+  // evaluates the forces. Call before every Step() while the mesh moves.
+  void SetMeshMotion(int k, const MeshMotion& motion);
+  const MeshMotion& mesh_motion(int k) const;
+  MeshWrench mesh_wrench(int k) const;
+
+  // Sleeping (SleepConfig); may be switched on and off between steps.
+  void set_sleep(const SleepConfig& sleep);
+  int64_t awake_count() const;
+
   // Contact history, for saving and restoring a bed bit for bit.
   std::vector<ContactRecord> Contacts() const;
   void SetContacts(const std::vector<ContactRecord>& contacts);
@@ -131,6 +172,9 @@ class System {
   void Rebuild();        // reorder storage by cell, rebuild the lists, carry the history over
   void ComputeForces();  // contacts into p_.f, p_.t (which hold gravity already)
   void Diagnose(StepStatus* status) const;
+  void MeshForces();        // particle-mesh contacts into p_.f, p_.t and the mesh wrenches
+  void BuildMeshCandidates(int k);
+  void UpdateSleep();       // sleep/wake decisions every sleep.check_every steps
   struct ContactBatch;
   void PairForces(ContactBatch& batch, size_t n);  // forces of a batch of touching pairs
 
