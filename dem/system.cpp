@@ -115,6 +115,8 @@ struct System::Impl {
   int64_t mesh_contacts = 0;
   int64_t awake = 0;
   int64_t sleep_counter = 0;  // steps since the last sleep check
+  std::vector<int32_t> active;  // storage indices of the awake particles (sleep enabled)
+  bool active_valid = false;
 
   std::vector<ContactBatch> batches;  // one per thread
   size_t batch_capacity = 0;
@@ -190,7 +192,8 @@ int64_t System::AddParticle(const Vec3& x, const Vec3& v, const Vec3& w, double 
   p_.inv_inertia.push_back(1.0 / (0.4 * mass * radius * radius));
   p_.material.push_back(material);
   p_.awake.push_back(1);
-  impl_->needs_rebuild = true;  // existing list indices stay valid: new particles come last
+  impl_->needs_rebuild = true;
+  impl_->active_valid = false;  // existing list indices stay valid: new particles come last
   return id;
 }
 
@@ -231,6 +234,7 @@ void System::RemoveParticles(const std::vector<int64_t>& ids) {
   p_.inv_inertia.resize(out);
   p_.material.resize(out);
   p_.awake.resize(out);
+  impl_->active_valid = false;
   for (Impl::MeshState& ms : impl_->meshes) {
     size_t kept = 0;
     for (const Impl::MeshHistory& h : ms.history)
@@ -439,6 +443,7 @@ void System::Rebuild() {
   m.drift_bound = 0;
   m.list_valid = true;
   m.needs_rebuild = false;
+  m.active_valid = false;
   ++builds_;
 }
 
@@ -702,15 +707,19 @@ StepStatus System::Step() {
   const Vec3 g = config_.gravity;
 
   // Velocity Verlet (LIGGGHTS fix nve/sphere; Allen & Tildesley eq. 3.19): half kick, drift.
+  // With sleeping, only the awake particles (m.active) move; a sleeper's force and torque are
+  // not kept up to date (they are zeroed when it wakes: a sleeper is at rest in equilibrium).
   double max_v2 = 0;
-  const uint8_t* awake = p_.awake.data();
+  const bool sleeping = config_.sleep.enabled;
+  if (sleeping && !m.active_valid) RefreshActive();
+  const int32_t* active = m.active.data();
+  const int64_t n_moving = sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : max_v2)
-  for (size_t i = 0; i < n; ++i) {
-    if (awake[i]) {
-      v[i] += (h * inv_mass[i]) * f[i];
-      w[i] += (h * inv_inertia[i]) * t[i];
-      x[i] += dt * v[i];
-    }
+  for (int64_t a = 0; a < n_moving; ++a) {
+    const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
+    v[i] += (h * inv_mass[i]) * f[i];
+    w[i] += (h * inv_inertia[i]) * t[i];
+    x[i] += dt * v[i];
     max_v2 = std::max(max_v2, Norm2(v[i]));
     // Start this step's force with gravity (contacts add to it in ComputeForces).
     f[i] = mass[i] * g;
@@ -744,15 +753,17 @@ StepStatus System::Step() {
   t = p_.t.data();
   inv_mass = p_.inv_mass.data();
   inv_inertia = p_.inv_inertia.data();
-  awake = p_.awake.data();
+  if (sleeping && !m.active_valid) RefreshActive();
+  active = m.active.data();
+  const int64_t n_kicked = sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
   max_v2 = 0;
   int bad = 0;
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max       \
                                                                               : max_v2) \
     reduction(|                                                                         \
               : bad)
-  for (size_t i = 0; i < n; ++i) {
-    if (!awake[i]) continue;
+  for (int64_t a = 0; a < n_kicked; ++a) {
+    const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
     v[i] += (h * inv_mass[i]) * f[i];
     w[i] += (h * inv_inertia[i]) * t[i];
     const double v2 = Norm2(v[i]);
@@ -1000,7 +1011,10 @@ void System::MeshForces() {
         ms.history.push_back(ms.fresh[static_cast<size_t>(kMaxContacts) * g + a]);
       if (!p_.awake[i]) {  // a mesh touched a sleeping particle: wake it, pairs come next step
         p_.awake[i] = 1;
+        p_.f[i] = ms.group_force[g];  // at rest in equilibrium but for the mesh's push
+        p_.t[i] = ms.group_torque[g];
         m.needs_rebuild = true;
+        m.active_valid = false;
       }
     }
     ms.wrench = wrench;
@@ -1017,9 +1031,15 @@ void System::MeshForces() {
 void System::set_sleep(const SleepConfig& sleep) {
   config_.sleep = sleep;
   if (!sleep.enabled) {
-    for (uint8_t& a : p_.awake) a = 1;
+    for (size_t i = 0; i < p_.size(); ++i)
+      if (!p_.awake[i]) {
+        p_.awake[i] = 1;
+        p_.f[i] = Vec3{};
+        p_.t[i] = Vec3{};
+      }
     impl_->needs_rebuild = true;
   }
+  impl_->active_valid = false;
 }
 
 int64_t System::awake_count() const {
@@ -1030,9 +1050,10 @@ int64_t System::awake_count() const {
 
 // Sleep/wake decisions. `awake` holds 0 for a sleeping particle and 1 + q for an awake one that
 // has been quiet (slower than sleep.speed, spinning slower than speed / r) for q checks in a row.
-// Awake: in the zone around a mesh (its bounding box grown by wake_distance), or not quiet, or
-// touched by an awake particle faster than wake_speed. A particle quiet for quiet_checks checks
-// outside every zone sleeps with v = w = 0.
+// A sleeper wakes when touched by an awake particle faster than wake_speed, or, once any sleeper
+// has entered the inner zone of a mesh (its bounding box grown by wake_distance), with every
+// sleeper of the outer zone (grown by wake_distance + wake_margin). An awake particle quiet for
+// quiet_checks checks outside every outer zone sleeps with v = w = 0.
 void System::UpdateSleep() {
   Impl& m = *impl_;
   const SleepConfig& sc = config_.sleep;
@@ -1048,30 +1069,42 @@ void System::UpdateSleep() {
       if (!p_.awake[i] && p_.awake[j] && Norm2(p_.v[j]) > wake2) woken[i] = 1;
       if (!p_.awake[j] && p_.awake[i] && Norm2(p_.v[i]) > wake2) woken[j] = 1;
     }
-  std::vector<Vec3> zone;  // lo, hi of each mesh
+  // Zones around the meshes: inner (bounding box + wake_distance) and outer (+ wake_margin).
+  std::vector<Vec3> inner, outer;  // lo, hi of each mesh
   for (const Impl::MeshState& ms : m.meshes) {
     Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
     for (const Vec3& v : ms.world) {
       lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
       hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
     }
-    const Vec3 d{sc.wake_distance, sc.wake_distance, sc.wake_distance};
-    zone.push_back(lo - d);
-    zone.push_back(hi + d);
+    const double d = sc.wake_distance, e = sc.wake_distance + sc.wake_margin;
+    inner.push_back(lo - Vec3{d, d, d});
+    inner.push_back(hi + Vec3{d, d, d});
+    outer.push_back(lo - Vec3{e, e, e});
+    outer.push_back(hi + Vec3{e, e, e});
   }
+  auto in = [](const std::vector<Vec3>& zone, const Vec3& c) {
+    bool hit = false;
+    for (size_t z = 0; z < zone.size(); z += 2)
+      hit = hit || (c.x >= zone[z].x && c.x <= zone[z + 1].x && c.y >= zone[z].y &&
+                    c.y <= zone[z + 1].y && c.z >= zone[z].z && c.z <= zone[z + 1].z);
+    return hit;
+  };
+  // Does a sleeper lie in an inner zone? Then every sleeper of the outer zones wakes.
+  bool batch = false;
+  for (size_t i = 0; i < n && !batch; ++i) batch = !p_.awake[i] && in(inner, p_.x[i]);
   const double quiet2 = sc.speed * sc.speed;
   bool woke = false;
   int64_t awake = 0;
   for (size_t i = 0; i < n; ++i) {
     const Vec3 c = p_.x[i];
-    bool near = false;
-    for (size_t z = 0; z < zone.size(); z += 2)
-      near = near || (c.x >= zone[z].x && c.x <= zone[z + 1].x && c.y >= zone[z].y &&
-                      c.y <= zone[z + 1].y && c.z >= zone[z].z && c.z <= zone[z + 1].z);
+    const bool near = in(outer, c);
     uint8_t& a = p_.awake[i];
     if (a == 0) {
-      if (near || woken[i]) {
+      if ((batch && near) || woken[i]) {
         a = 1;
+        p_.f[i] = Vec3{};  // at rest in equilibrium (its force was not kept while asleep)
+        p_.t[i] = Vec3{};
         woke = true;
       }
     } else {
@@ -1083,6 +1116,7 @@ void System::UpdateSleep() {
         a = 0;
         p_.v[i] = Vec3{};
         p_.w[i] = Vec3{};
+        m.active_valid = false;
       } else {
         ++a;
       }
@@ -1090,7 +1124,18 @@ void System::UpdateSleep() {
     awake += a != 0;
   }
   m.awake = awake;
-  if (woke) m.needs_rebuild = true;
+  if (woke) {
+    m.needs_rebuild = true;
+    m.active_valid = false;
+  }
+}
+
+void System::RefreshActive() {
+  Impl& m = *impl_;
+  m.active.clear();
+  for (size_t i = 0; i < p_.size(); ++i)
+    if (p_.awake[i]) m.active.push_back(static_cast<int32_t>(i));
+  m.active_valid = true;
 }
 
 void System::Diagnose(StepStatus* status) const {

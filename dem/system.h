@@ -29,6 +29,9 @@ struct SleepConfig {
   double speed = 2e-3;          // a particle is quiet below this speed (and spin * radius) [m/s]
   double wake_speed = 5e-3;     // a sleeping particle touched by one faster than this wakes [m/s]
   double wake_distance = 0.02;  // particles this close to a mesh's bounding box stay awake [m]
+  double wake_margin = 0.01;    // when a sleeper enters that zone, every sleeper within
+                                // wake_distance + wake_margin wakes at once, so wake-ups (each a
+                                // neighbour-list rebuild) come once per wake_margin of travel [m]
   int check_every = 20;         // steps between sleep/wake checks
   int quiet_checks = 5;         // consecutive quiet checks before a particle falls asleep
 };
@@ -175,6 +178,7 @@ class System {
   void MeshForces();        // particle-mesh contacts into p_.f, p_.t and the mesh wrenches
   void BuildMeshCandidates(int k);
   void UpdateSleep();       // sleep/wake decisions every sleep.check_every steps
+  void RefreshActive();     // list the awake particles
   struct ContactBatch;
   void PairForces(ContactBatch& batch, size_t n);  // forces of a batch of touching pairs
 

@@ -1,0 +1,126 @@
+// Sleeping particles (dem SleepConfig): a resting layer falls asleep and stays exactly at rest;
+// an impact wakes the particles it touches and no others; a mesh approaching wakes the particles
+// of its zone; results do not depend on the thread count.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/dem/test_util.h"
+
+namespace dem {
+namespace {
+
+constexpr double kRadius = 1.75e-3;
+
+SystemConfig LayerConfig() {
+  SystemConfig c;
+  c.gravity = {0, 0, -9.81};
+  c.time_step = 0.1 * RayleighTimeStep(kRadius, test::Snow());
+  c.skin = 0.5 * kRadius;
+  c.domain_min = {0, 0, 0};
+  c.domain_max = {0.1, 0.1, 0.1};
+  c.planes = {test::Floor(0.0, 1)};
+  c.sleep.enabled = true;
+  c.sleep.check_every = 10;
+  c.sleep.quiet_checks = 3;
+  c.sleep.wake_distance = 0.005;
+  c.sleep.wake_margin = 0.005;
+  return c;
+}
+
+// A 20 x 20 layer of spheres on the floor, 0.2 r apart: each rests on the floor alone.
+void AddLayer(System& s) {
+  for (int j = 0; j < 20; ++j)
+    for (int i = 0; i < 20; ++i)
+      s.AddParticle({0.01 + i * 2.2 * kRadius, 0.01 + j * 2.2 * kRadius, kRadius * 0.9999}, {}, {},
+                    kRadius, 0);
+}
+
+TEST(SleepTest, RestingLayerSleepsAndImpactWakesOnlyWhatItTouches) {
+  System s(test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05}), LayerConfig());
+  s.set_num_threads(1);
+  AddLayer(s);
+  test::StepOk(s, 2000);
+  EXPECT_EQ(s.awake_count(), 0);  // all quiet: asleep
+  const Particles before = s.particles();
+  // Drop a sphere at 0.5 m/s onto particle (5, 5) (id 105).
+  const Vec3 target = before.x[0] * 0.0 + Vec3{0.01 + 5 * 2.2 * kRadius, 0.01 + 5 * 2.2 * kRadius,
+                                               kRadius};
+  s.AddParticle(target + Vec3{0, 0, 2 * kRadius + 1e-4}, {0, 0, -0.5}, {}, kRadius, 0);
+  test::StepOk(s, 200);
+  const Particles& p = s.particles();
+  int64_t moved = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (p.id[i] == 400) continue;  // the dropped sphere
+    const bool hit = p.id[i] == 105;
+    // The struck sphere woke and moved; every other sphere is bitwise where it slept.
+    for (size_t b = 0; b < before.size(); ++b)
+      if (before.id[b] == p.id[i]) {
+        const bool same = p.x[i].x == before.x[b].x && p.x[i].y == before.x[b].y &&
+                          p.x[i].z == before.x[b].z;
+        if (!same) ++moved;
+        if (hit) {
+          EXPECT_FALSE(same);
+        }
+      }
+  }
+  EXPECT_GE(moved, 1);
+  EXPECT_LE(moved, 5);  // the struck sphere and at most its four nearest neighbours
+}
+
+// A cube mesh lowered towards the sleeping layer wakes the spheres under it (within the zone of
+// wake_distance + wake_margin around its bounding box) and leaves the far ones asleep.
+TEST(SleepTest, ApproachingMeshWakesItsZone) {
+  System s(test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05}), LayerConfig());
+  s.set_num_threads(1);
+  AddLayer(s);
+  TriangleMesh cube;
+  cube.material = 1;
+  const double h = 0.004;
+  for (int k = 0; k < 8; ++k) cube.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
+  const int32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : f) {
+    cube.triangles.push_back({q[0], q[1], q[2]});
+    cube.triangles.push_back({q[0], q[2], q[3]});
+  }
+  const int k = s.AddMesh(cube);
+  MeshMotion mm;
+  mm.pose.position = {0.03, 0.03, 0.08};  // far above
+  s.SetMeshMotion(k, mm);
+  test::StepOk(s, 2000);
+  EXPECT_EQ(s.awake_count(), 0);
+  mm.pose.position.z = h + 2 * kRadius + 0.002;  // 2 mm above the spheres: in the inner zone
+  s.SetMeshMotion(k, mm);
+  test::StepOk(s, 20);
+  // Awake: the spheres whose centres lie within the outer zone (box +- (h + 10 mm)) in x, y.
+  int64_t expected = 0;
+  const Particles& p = s.particles();
+  for (size_t i = 0; i < p.size(); ++i)
+    if (std::abs(p.x[i].x - 0.03) <= h + 0.01 && std::abs(p.x[i].y - 0.03) <= h + 0.01) ++expected;
+  EXPECT_GT(expected, 0);
+  EXPECT_EQ(s.awake_count(), expected);
+}
+
+// Determinism with sleeping: spheres rained onto a sleeping layer, 1 and 2 threads, same hash.
+uint64_t RainHash(int threads) {
+  System s(test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05}), LayerConfig());
+  s.set_num_threads(threads);
+  AddLayer(s);
+  for (int k = 0; k < 30; ++k)
+    s.AddParticle({0.012 + 0.0013 * k, 0.02 + 0.0009 * k, 0.01 + 0.004 * (k % 5)}, {0, 0, -0.3}, {},
+                  kRadius, 0);
+  for (int k = 0; k < 3000; ++k) {
+    const StepStatus st = s.Step();
+    if (!st.ok()) {
+      ADD_FAILURE() << st.message;
+      break;
+    }
+  }
+  return s.StateHash();
+}
+
+TEST(SleepTest, SameResultForOneAndTwoThreads) { EXPECT_EQ(RainHash(1), RainHash(2)); }
+
+}  // namespace
+}  // namespace dem
