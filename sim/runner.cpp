@@ -11,6 +11,7 @@
 
 #include "sim/bed.h"
 #include "sim/bed_io.h"
+#include "sim/dig_run.h"
 #include "sim/h5_output.h"
 #include "sim/progress.h"
 
@@ -123,6 +124,14 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   }
 
   H5Output out(options.output, scene.yaml_text, SCOOPSIM_VERSION, scene.output.flush_seconds);
+  if (scene.dig.enabled) {
+    const int status = RunDig(scene, options, system.get(), &out);
+    out.SetStateHash(system->StateHash());
+    out.SetAttribute("time", system->time());
+    out.Close();
+    std::fprintf(stderr, "scoopsim: wrote %s\n", out.path().c_str());
+    return status;
+  }
   const int num_planes = static_cast<int>(system->config().planes.size());
   auto record = [&] {
     const double t = system->time();

@@ -2,12 +2,26 @@
 // status; bad input throws sim::InputError (the CLI prints it and exits 2).
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "sim/scene.h"
 #include "sim/world_view.h"
 
 namespace sim {
+
+// What a dig run measured, for callers that want numbers rather than the HDF5 file (tests,
+// studies). Magnitudes of the wrench in the world frame about the scoop CoM, over all rows.
+struct DigSummary {
+  double peak_force = 0;              // max |F| [N]
+  double mean_force = 0;              // mean |F| over the rows after first contact [N]
+  double peak_torque = 0;             // max |T| [N m]
+  std::vector<double> collected_mass;  // per pass [kg]
+  int64_t particles = 0;              // at the start of the dig
+  int64_t steps = 0;
+  double simulated = 0;               // [s]
+};
 
 struct RunOptions {
   int threads = 0;     // 0 = all cores
@@ -17,6 +31,7 @@ struct RunOptions {
   // (0 = at every output interval), from the main thread, with no OpenMP region active.
   FrameCallback on_frame;
   double frame_every = 0;  // [s]
+  DigSummary* dig_summary = nullptr;  // filled by a dig run when set
 };
 
 // `scoopsim bed SCENE -o BED.h5`: fill the scene's box, settle, save the bed.

@@ -323,6 +323,154 @@ void ParseMaterials(const std::string& file, const YAML::Node& root, dem::Materi
   }
 }
 
+constexpr double kDeg = kPi / 180.0;
+
+// One trajectory segment: `off`, or a map overriding the preset's start, speed and amount.
+// `speed_key`/`amount_key` name the keys (speed/distance in m/s and m, rate/angle in deg/s, deg).
+void ParseSegment(const std::string& file, const MapReader& parent, const char* key,
+                  const char* speed_key, const char* amount_key, double unit,
+                  TrajectorySpec::Segment* seg) {
+  if (!parent.Has(key)) return;
+  const YAML::Node node = parent.node()[key];
+  if (node.IsScalar() && node.Scalar() == "off") {
+    seg->enabled = false;
+    return;
+  }
+  const MapReader m(file, node, parent.Key(key), {"start", speed_key, amount_key});
+  const bool was = seg->enabled;
+  seg->start = m.Number("start", seg->start, "a number >= 0 (s)", NonNegative);
+  if (!was && !m.Has(speed_key)) m.Need(speed_key, "a number > 0");
+  if (!was && !m.Has(amount_key)) m.Need(amount_key, "a number > 0");
+  seg->speed = m.Number(speed_key, seg->speed / unit, "a number > 0", Positive) * unit;
+  seg->amount = m.Number(amount_key, seg->amount / unit, "a number > 0", Positive) * unit;
+  seg->enabled = true;
+}
+
+void ParseDig(const std::string& file, const YAML::Node& node, int bed_material, Scene* scene) {
+  DigSpec& dig = scene->dig;
+  dig.enabled = true;
+  const MapReader d(file, node, "dig",
+                    {"scoop", "trajectory", "passes", "bite_depth", "surface", "interval"});
+  // Scoop.
+  const YAML::Node scoop_node = d.Need("scoop", "a map with keys mesh, material");
+  const MapReader sc(file, scoop_node, "dig.scoop",
+                     {"mesh", "scale", "material", "mass", "com", "cavity"});
+  ScoopSpec& scoop = dig.scoop;
+  scoop.mesh = ResolveAgainst(file, sc.String("mesh", "the path of a mesh file (STL, OBJ, ...)"));
+  if (!std::filesystem::exists(scoop.mesh)) {
+    Fail(file, LineOf(scoop_node["mesh"]), "dig.scoop.mesh", "the path of a readable mesh file",
+         scoop_node["mesh"].Scalar(), "no file " + scoop.mesh);
+  }
+  scoop.scale = sc.Number("scale", 1.0, "a number > 0 (mesh units to m)", Positive);
+  scoop.material = sc.String("material", "a material name");
+  scoop.material_index = scene->materials.Find(scoop.material);
+  if (scoop.material_index < 0) {
+    Fail(file, LineOf(scoop_node["material"]), "dig.scoop.material",
+         "a material defined in " + scene->materials_path, scoop.material);
+  }
+  if (!scene->materials.has_interaction(bed_material, scoop.material_index)) {
+    Fail(file, LineOf(scoop_node["material"]), "dig.scoop.material",
+         "an interaction for the pair [" + scene->bed.material + ", " + scoop.material + "] in " +
+             scene->materials_path,
+         "none");
+  }
+  scoop.mass = sc.Number("mass", scoop.mass, "a number > 0 (kg)", Positive);
+  if (sc.Has("com")) scoop.com = sc.Vector("com", "a list of 3 numbers [x, y, z] (m, l_scoop)");
+  if (sc.Has("cavity")) {
+    const MapReader cav(file, scoop_node["cavity"], "dig.scoop.cavity", {"min", "max"});
+    scoop.cavity_min = cav.Vector("min", "a list of 3 numbers [x, y, z] (m, l_scoop)");
+    scoop.cavity_max = cav.Vector("max", "a list of 3 numbers [x, y, z] (m, l_scoop)");
+    for (int i = 0; i < 3; ++i)
+      if (!(scoop.cavity_max[i] > scoop.cavity_min[i]))
+        Fail(file, LineOf(scoop_node["cavity"]), "dig.scoop.cavity.max",
+             "every component greater than min's", Describe(scoop_node["cavity"]["max"]));
+  }
+
+  // Trajectory: a preset, then overrides.
+  const YAML::Node traj_node = d.Need("trajectory", "a map with keys preset, start, ...");
+  const MapReader tr(file, traj_node, "dig.trajectory",
+                     {"preset", "start", "heading", "pivot", "initial_pitch", "approach",
+                      "rotation1", "linear", "rotation2"});
+  dig.preset = tr.Has("preset") ? tr.String("preset", "table1, table4 or none") : "none";
+  if (dig.preset == "table1") {
+    dig.trajectory = Table1Preset();
+  } else if (dig.preset == "table4") {
+    dig.trajectory = Table4Preset();
+  } else if (dig.preset == "none") {
+    dig.trajectory = TrajectorySpec{};
+  } else {
+    Fail(file, LineOf(traj_node["preset"]), "dig.trajectory.preset", "table1, table4 or none",
+         dig.preset);
+  }
+  TrajectorySpec& t = dig.trajectory;
+  {
+    const std::string expected = "a list of 2 numbers [x, y]: pivot position at t = 0 (m)";
+    const YAML::Node st = tr.Need("start", expected);
+    if (!st.IsSequence() || st.size() != 2) Fail(file, LineOf(st), "dig.trajectory.start", expected, Describe(st));
+    t.pivot_start.x = tr.CheckNumber(st[0], "dig.trajectory.start", expected, [](double) { return true; }, &st);
+    t.pivot_start.y = tr.CheckNumber(st[1], "dig.trajectory.start", expected, [](double) { return true; }, &st);
+  }
+  dig.heading = tr.Number("heading", 0.0, "a number (deg)", [](double) { return true; }) * kDeg;
+  if (tr.Has("pivot")) t.pivot_offset = tr.Vector("pivot", "a list of 3 numbers [x, y, z] (m, l_scoop)");
+  t.initial_pitch =
+      tr.Number("initial_pitch", t.initial_pitch / kDeg, "a number in [-180, 180] (deg)",
+                [](double v) { return v >= -180 && v <= 180; }) *
+      kDeg;
+  ParseSegment(file, tr, "approach", "speed", "distance", 1.0, &t.approach);
+  ParseSegment(file, tr, "rotation1", "rate", "angle", kDeg, &t.rotation1);
+  ParseSegment(file, tr, "linear", "speed", "distance", 1.0, &t.linear);
+  ParseSegment(file, tr, "rotation2", "rate", "angle", kDeg, &t.rotation2);
+  try {
+    Trajectory check(t);
+    (void)check;
+  } catch (const std::invalid_argument& e) {
+    Fail(file, LineOf(traj_node), "dig.trajectory", "segments in time order, not overlapping",
+         e.what());
+  }
+  if (!t.approach.enabled && !t.rotation1.enabled && !t.linear.enabled && !t.rotation2.enabled)
+    Fail(file, LineOf(traj_node), "dig.trajectory", "at least one segment (preset or map)",
+         "none");
+
+  dig.passes = static_cast<int>(
+      d.Integer("passes", 1, "an integer in [1, 100]", [](int64_t v) { return v >= 1 && v <= 100; }));
+  dig.bite_depth = d.Number("bite_depth", dig.bite_depth, "a number >= 0 (m)", NonNegative);
+  if (d.Has("surface")) {
+    const YAML::Node sf = node["surface"];
+    if (!(sf.IsScalar() && sf.Scalar() == "auto")) {
+      dig.surface = d.Number("surface", "a number (m) or auto", [](double) { return true; });
+      dig.surface_given = true;
+    }
+  }
+  dig.interval = d.Number("interval", dig.interval, "a number > 0 (s)", Positive);
+}
+
+void ParseSleep(const std::string& file, const YAML::Node& node, dem::SleepConfig* sleep) {
+  const MapReader m(file, node, "sleep",
+                    {"enabled", "speed", "wake_speed", "wake_distance", "wake_margin",
+                     "check_every", "quiet_checks"});
+  if (m.Has("enabled")) {
+    const YAML::Node e = node["enabled"];
+    bool v = false;
+    if (!e.IsScalar() || !YAML::convert<bool>::decode(e, v))
+      Fail(file, LineOf(e), "sleep.enabled", "true or false", Describe(e));
+    sleep->enabled = v;
+  } else {
+    sleep->enabled = true;
+  }
+  sleep->speed = m.Number("speed", sleep->speed, "a number > 0 (m/s)", Positive);
+  sleep->wake_speed = m.Number("wake_speed", sleep->wake_speed, "a number > 0 (m/s)", Positive);
+  sleep->wake_distance =
+      m.Number("wake_distance", sleep->wake_distance, "a number >= 0 (m)", NonNegative);
+  sleep->wake_margin =
+      m.Number("wake_margin", sleep->wake_margin, "a number >= 0 (m)", NonNegative);
+  sleep->check_every = static_cast<int>(m.Integer("check_every", sleep->check_every,
+                                                  "an integer in [1, 100000] (steps)",
+                                                  [](int64_t v) { return v >= 1 && v <= 100000; }));
+  sleep->quiet_checks = static_cast<int>(m.Integer(
+      "quiet_checks", sleep->quiet_checks, "an integer in [1, 250]",
+      [](int64_t v) { return v >= 1 && v <= 250; }));
+}
+
 }  // namespace
 
 void LoadMaterials(const std::string& path, dem::MaterialTable* table) {
@@ -339,7 +487,7 @@ Scene LoadScene(const std::string& path) {
   if (root.IsNull()) Fail(path, 1, "(top level)", "a map of scene keys", "an empty file");
   const MapReader top(path, root, "",
                       {"materials", "gravity", "time_step", "neighbor", "box", "bed", "duration",
-                       "output", "threads", "notes"});
+                       "output", "threads", "dig", "sleep", "notes"});
 
   // Materials file, relative to the scene's folder.
   const std::string materials_expected = "the path of a readable materials file";
@@ -506,6 +654,9 @@ Scene LoadScene(const std::string& path) {
   scene.threads =
       static_cast<int>(top.Integer("threads", 0, "an integer in [0, 4096] (0 = all cores)",
                                    [](int64_t v) { return v >= 0 && v <= 4096; }));
+
+  if (top.Has("dig")) ParseDig(path, root["dig"], bed_material, &scene);
+  if (top.Has("sleep")) ParseSleep(path, root["sleep"], &scene.sleep);
 
   // Derived time step: a fraction of the Rayleigh time of the smallest sphere (paper eq. 4).
   scene.time_step = scene.rayleigh_fraction *

@@ -7,7 +7,9 @@
 #include <string>
 
 #include "dem/material.h"
+#include "dem/system.h"
 #include "dem/vec3.h"
+#include "sim/trajectory.h"
 
 namespace sim {
 
@@ -38,6 +40,36 @@ struct OutputSpec {
   double flush_seconds = 10.0;  // wall-clock flush period [s]
 };
 
+// The scoop: a triangle mesh in the l_scoop frame, its mass properties and the cavity that holds
+// the collected sample.
+struct ScoopSpec {
+  std::string mesh;       // mesh file (any format assimp reads), resolved against the scene
+  double scale = 1.0;     // mesh units -> m
+  std::string material;   // scoop material (key dig.scoop.material)
+  int material_index = -1;
+  double mass = 0.30936;                   // [kg] (FACTS.md section 2, l_scoop)
+  dem::Vec3 com{0.001315, 0.0, 0.045328};  // centre of mass in l_scoop [m]
+  // Box of the l_scoop frame whose particles count as collected at the end of a pass [m]:
+  // between the back plate, the blade, the side plates, the lid and the bottom (FACTS.md 3).
+  dem::Vec3 cavity_min{-0.031, -0.0399, 0.0015};
+  dem::Vec3 cavity_max{0.094, 0.0399, 0.0755};
+};
+
+// A dig of `passes` passes; pass p cuts to p * bite_depth below the original surface (the
+// lowest point of the level scoop during the linear segment).
+struct DigSpec {
+  bool enabled = false;
+  ScoopSpec scoop;
+  std::string preset = "none";  // trajectory preset the keys below override: table1, table4, none
+  TrajectorySpec trajectory;    // pivot_start.z is set per pass at run time
+  double heading = 0;           // trench direction: rotation about world z from +x [rad]
+  int passes = 1;
+  double bite_depth = 0.015;  // [m]
+  double surface = 0;         // world z of the original surface [m] (when surface_given)
+  bool surface_given = false;  // else measured from the settled bed
+  double interval = 1e-3;      // time between rows of /scoop/ [s]
+};
+
 struct Scene {
   std::string path;       // the scene file as given
   std::string yaml_text;  // its full text (stored as the HDF5 attribute scene_yaml)
@@ -53,6 +85,8 @@ struct Scene {
   double duration = 0;  // simulated time of `scoopsim run` [s]
   OutputSpec output;
   int threads = 0;  // 0 = all cores (CLI --threads overrides)
+  DigSpec dig;
+  dem::SleepConfig sleep;  // used while digging (never while settling)
 };
 
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.

@@ -1,0 +1,90 @@
+#include "sim/dig.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace sim {
+
+BodyFrame StudyBodyFrame(double heading, const dem::Vec3& gravity) {
+  BodyFrame b;
+  const double gn = dem::Norm(gravity);
+  b.z = gn > 0 ? (-1.0 / gn) * gravity : dem::Vec3{0, 0, 1};
+  // The pitch axis of a dig along heading h is the horizontal direction across the trench;
+  // X is its negative so that Y = Z x X points forward along the trench.
+  const dem::Vec3 across{-std::sin(heading), std::cos(heading), 0.0};  // world y at heading 0
+  dem::Vec3 x = -1.0 * across;
+  x = x - dem::Dot(x, b.z) * b.z;  // horizontal for a tilted gravity too
+  b.x = (1.0 / dem::Norm(x)) * x;
+  b.y = dem::Cross(b.z, b.x);
+  return b;
+}
+
+ScoopWrench ComputeScoopWrench(const dem::MeshWrench& wrench, const dem::Pose& pose,
+                               const dem::Vec3& com_scoop, const BodyFrame& body) {
+  ScoopWrench w;
+  // Paper eqs. 2-3: F = sum F_i, T = sum r_i x F_i with r_i from the CoM. dem gives the moment
+  // about the mesh body origin O; about the CoM C it is T_O - (C - O) x F.
+  const dem::Vec3 arm = dem::Rotate(pose.orientation, com_scoop);  // C - O
+  w.force_world = wrench.force;
+  w.torque_world = wrench.torque - dem::Cross(arm, wrench.force);
+  w.force_scoop = dem::RotateInverse(pose.orientation, w.force_world);
+  w.torque_scoop = dem::RotateInverse(pose.orientation, w.torque_world);
+  auto to_body = [&](const dem::Vec3& v) {
+    return dem::Vec3{dem::Dot(v, body.x), dem::Dot(v, body.y), dem::Dot(v, body.z)};
+  };
+  w.force_body = to_body(w.force_world);
+  w.torque_body = to_body(w.torque_world);
+  return w;
+}
+
+double BedSurface(const dem::Particles& p, const dem::Vec3& lo, const dem::Vec3& hi,
+                  double column) {
+  const int nx = std::max(1, static_cast<int>((hi.x - lo.x) / column));
+  const int ny = std::max(1, static_cast<int>((hi.y - lo.y) / column));
+  std::vector<double> top(static_cast<size_t>(nx) * ny, -1e300);
+  for (size_t i = 0; i < p.size(); ++i) {
+    const dem::Vec3& x = p.x[i];
+    if (x.x < lo.x || x.x >= hi.x || x.y < lo.y || x.y >= hi.y) continue;
+    const int cx = std::min(nx - 1, static_cast<int>((x.x - lo.x) / (hi.x - lo.x) * nx));
+    const int cy = std::min(ny - 1, static_cast<int>((x.y - lo.y) / (hi.y - lo.y) * ny));
+    double& t = top[static_cast<size_t>(cy) * nx + cx];
+    t = std::max(t, x.z + p.radius[i]);
+  }
+  double sum = 0;
+  int count = 0;
+  for (double t : top)
+    if (t > -1e300) {
+      sum += t;
+      ++count;
+    }
+  return count > 0 ? sum / count : lo.z;
+}
+
+std::vector<int64_t> ParticlesInCavity(const dem::Particles& p, const dem::Pose& pose,
+                                       const dem::Vec3& cavity_min, const dem::Vec3& cavity_max,
+                                       double* mass) {
+  std::vector<int64_t> ids;
+  double m = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const dem::Vec3 b = dem::ApplyInverse(pose, p.x[i]);
+    if (b.x >= cavity_min.x && b.x <= cavity_max.x && b.y >= cavity_min.y &&
+        b.y <= cavity_max.y && b.z >= cavity_min.z && b.z <= cavity_max.z) {
+      ids.push_back(p.id[i]);
+      m += p.mass[i];
+    }
+  }
+  std::sort(ids.begin(), ids.end());
+  if (mass) *mass = m;
+  return ids;
+}
+
+double LowestBelowPivot(const dem::TriangleMesh& mesh, const dem::Quat& level,
+                        const dem::Vec3& pivot_scoop) {
+  double lowest = 1e300;
+  for (const dem::Vec3& v : mesh.vertices)
+    lowest = std::min(lowest, dem::Rotate(level, v - pivot_scoop).z);
+  return lowest;
+}
+
+}  // namespace sim
