@@ -116,6 +116,9 @@ struct System::Impl {
   int64_t awake = 0;
   int64_t sleep_counter = 0;  // steps since the last sleep check
   std::vector<int32_t> active;  // storage indices of the awake particles (sleep enabled)
+  // With sleeping: the particles that own list pairs or wall candidates (the force pass skips
+  // the rest), in storage order, and where each slab's run of them starts (slabs + 1).
+  std::vector<int32_t> busy, slab_busy;
   bool active_valid = false;
 
   std::vector<ContactBatch> batches;  // one per thread
@@ -441,6 +444,17 @@ void System::Rebuild() {
   m.pending.clear();
   m.x_build = p_.x;
   m.drift_bound = 0;
+  if (config_.sleep.enabled) {
+    m.busy.clear();
+    m.slab_busy.assign(m.list.num_slabs() + 1, 0);
+    for (int sl = 0; sl < m.list.num_slabs(); ++sl) {
+      m.slab_busy[sl] = static_cast<int32_t>(m.busy.size());
+      for (int32_t i = m.list.slab_start[sl]; i < m.list.slab_start[sl + 1]; ++i)
+        if (m.list.start[i + 1] > m.list.start[i] || m.wall_start[i + 1] > m.wall_start[i])
+          m.busy.push_back(i);
+    }
+    m.slab_busy[m.list.num_slabs()] = static_cast<int32_t>(m.busy.size());
+  }
   m.list_valid = true;
   m.needs_rebuild = false;
   m.active_valid = false;
@@ -555,6 +569,8 @@ void System::ComputeForces() {
   Vec3* wall_shear = m.wall_shear.data();
   const Plane* planes = config_.planes.data();
 
+  const bool compact = config_.sleep.enabled;
+  const int32_t* busy = m.busy.data();
   if (m.batches.size() < static_cast<size_t>(num_threads_)) m.batches.resize(num_threads_);
   for (ContactBatch& b : m.batches)
     if (b.i.size() < m.batch_capacity) b.Resize(m.batch_capacity);
@@ -569,8 +585,10 @@ void System::ComputeForces() {
         int64_t touching = 0, wall_touching = 0;
         Vec3* plane_force = m.slab_plane_force.data() + static_cast<size_t>(s) * np;
         ContactBatch& batch = m.batches[omp_get_thread_num()];
-        const int32_t slab_end = m.list.slab_start[s + 1];
-        int32_t block = m.list.slab_start[s];
+        // Particles are visited by position in the slab (all of them), or, with sleeping, through
+        // the list of busy ones.
+        const int32_t slab_end = compact ? m.slab_busy[s + 1] : m.list.slab_start[s + 1];
+        int32_t block = compact ? m.slab_busy[s] : m.list.slab_start[s];
         while (block < slab_end) {
           // 1. Find the touching pairs of a block of particles without branching on the
           //    outcome (a contact is a coin toss for the branch predictor): write every
@@ -580,7 +598,7 @@ void System::ComputeForces() {
           size_t nb = 0;
           int32_t block_end = block;
           for (; block_end < slab_end; ++block_end) {
-            const int32_t i = block_end;
+            const int32_t i = compact ? busy[block_end] : block_end;
             if (nb + static_cast<size_t>(start[i + 1] - start[i]) > m.batch_capacity) break;
             const Vec3 xi = x[i];
             const double ri = radius[i];
@@ -642,7 +660,8 @@ void System::ComputeForces() {
             worst = std::max(worst, batch.overlap[b]);
           }
           touching += static_cast<int64_t>(nb);
-          for (int32_t i = block; i < block_end; ++i) {
+          for (int32_t at = block; at < block_end; ++at) {
+            const int32_t i = compact ? busy[at] : at;
             if (wall_start[i] == wall_start[i + 1]) continue;
             const Vec3 xi = x[i], vi = v[i], wi = w[i];
             const double ri = radius[i], mi = mass[i], inv_ii = inv_inertia[i];
@@ -1037,8 +1056,8 @@ void System::set_sleep(const SleepConfig& sleep) {
         p_.f[i] = Vec3{};
         p_.t[i] = Vec3{};
       }
-    impl_->needs_rebuild = true;
   }
+  impl_->needs_rebuild = true;  // the list and the busy particles depend on sleeping
   impl_->active_valid = false;
 }
 

@@ -32,7 +32,7 @@ struct SleepConfig {
   double wake_margin = 0.01;    // when a sleeper enters that zone, every sleeper within
                                 // wake_distance + wake_margin wakes at once, so wake-ups (each a
                                 // neighbour-list rebuild) come once per wake_margin of travel [m]
-  int check_every = 20;         // steps between sleep/wake checks
+  int check_every = 50;         // steps between sleep/wake checks
   int quiet_checks = 5;         // consecutive quiet checks before a particle falls asleep
 };
 
