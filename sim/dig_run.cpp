@@ -254,9 +254,12 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
   summary.simulated = system->time() - t_start;
   std::fprintf(stderr,
                "scoopsim: dig: %lld particles, %lld steps, %.4g s simulated; peak |F| %.4g N, "
-               "mean |F| %.4g N (after first contact), peak |T| %.4g N m\n",
+               "mean |F| %.4g N (after first contact), peak |T| %.4g N m; %lld neighbour builds, "
+               "%.3g awake particle-steps per step\n",
                static_cast<long long>(summary.particles), static_cast<long long>(summary.steps),
-               summary.simulated, summary.peak_force, summary.mean_force, summary.peak_torque);
+               summary.simulated, summary.peak_force, summary.mean_force, summary.peak_torque,
+               static_cast<long long>(system->neighbor_stats().builds),
+               static_cast<double>(particle_steps) / std::max<int64_t>(1, summary.steps));
   if (options.dig_summary) *options.dig_summary = summary;
   return status;
 }
