@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <vector>
 
 #include "sim/dig.h"
@@ -72,8 +73,24 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
   const dem::TriangleMesh* mesh_ptr = nullptr;
   const int k = system->AddMesh(mesh);
   mesh_ptr = &system->mesh(k);
+  // Mass properties: from the scene, or from the mesh at the scene's density.
+  double scoop_mass = dig.scoop.mass;
+  dem::Vec3 com_scoop = dig.scoop.com;
+  if (dig.scoop.density > 0) {
+    try {
+      const dem::MassProperties mp = dem::ComputeMassProperties(mesh, dig.scoop.density);
+      scoop_mass = mp.mass;
+      com_scoop = mp.center_of_mass;
+    } catch (const std::invalid_argument& e) {
+      throw InputError(dig.scoop.mesh + ": dig.scoop.density needs a closed mesh (" + e.what() +
+                       ")");
+    }
+  }
   out->SetAttribute("scoop_mesh", dig.scoop.mesh);
-  out->SetAttribute("scoop_mass", dig.scoop.mass);
+  out->SetAttribute("scoop_mass", scoop_mass);
+  out->SetAttribute("scoop_com_x", com_scoop.x);
+  out->SetAttribute("scoop_com_y", com_scoop.y);
+  out->SetAttribute("scoop_com_z", com_scoop.z);
 
   // Original surface: given, or the mean column top of the bed's central part (the columns
   // next to the walls are lower or higher by wall effects).
@@ -171,8 +188,8 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
       }
       const dem::MeshWrench mw = system->mesh_wrench(k);
       const dem::Pose& pose = system->mesh_motion(k).pose;
-      w = ComputeScoopWrench(mw, pose, dig.scoop.com, body);
-      const dem::Vec3 com = dem::Apply(pose, dig.scoop.com);
+      w = ComputeScoopWrench(mw, pose, com_scoop, body);
+      const dem::Vec3 com = dem::Apply(pose, com_scoop);
       // rho (paper Figs. 9-11): horizontal displacement of the CoM along the trench since the
       // scoop first touched a particle in this pass.
       if (!touched && mw.contacts > 0) {

@@ -354,7 +354,7 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
   // Scoop.
   const YAML::Node scoop_node = d.Need("scoop", "a map with keys mesh, material");
   const MapReader sc(file, scoop_node, "dig.scoop",
-                     {"mesh", "scale", "material", "mass", "com", "cavity"});
+                     {"mesh", "scale", "material", "mass", "com", "density", "cavity"});
   ScoopSpec& scoop = dig.scoop;
   scoop.mesh = ResolveAgainst(file, sc.String("mesh", "the path of a mesh file (STL, OBJ, ...)"));
   if (!std::filesystem::exists(scoop.mesh)) {
@@ -376,6 +376,10 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
   }
   scoop.mass = sc.Number("mass", scoop.mass, "a number > 0 (kg)", Positive);
   if (sc.Has("com")) scoop.com = sc.Vector("com", "a list of 3 numbers [x, y, z] (m, l_scoop)");
+  scoop.density = sc.Number("density", 0.0, "a number > 0 (kg/m^3)", Positive);
+  if (sc.Has("density") && (sc.Has("mass") || sc.Has("com")))
+    Fail(file, LineOf(scoop_node["density"]), "dig.scoop.density",
+         "either density (mass properties from the mesh) or mass and com", "both");
   if (sc.Has("cavity")) {
     const MapReader cav(file, scoop_node["cavity"], "dig.scoop.cavity", {"min", "max"});
     scoop.cavity_min = cav.Vector("min", "a list of 3 numbers [x, y, z] (m, l_scoop)");

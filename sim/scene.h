@@ -49,6 +49,8 @@ struct ScoopSpec {
   int material_index = -1;
   double mass = 0.30936;                   // [kg] (FACTS.md section 2, l_scoop)
   dem::Vec3 com{0.001315, 0.0, 0.045328};  // centre of mass in l_scoop [m]
+  double density = 0;  // > 0: mass and CoM computed from the (closed) mesh at this density
+                       // [kg/m^3] instead of `mass` and `com`
   // Box of the l_scoop frame whose particles count as collected at the end of a pass [m]:
   // between the back plate, the blade, the side plates, the lid and the bottom (FACTS.md 3).
   dem::Vec3 cavity_min{-0.031, -0.0399, 0.0015};
