@@ -107,12 +107,16 @@ struct System::Impl {
     std::vector<MeshHistory> history;  // sorted by particle storage index
     // Per-group results of the parallel pass, summed serially in group order.
     std::vector<Vec3> group_force, group_torque, group_mesh_torque;
+    std::vector<double> group_overlap;  // deepest overlap / diameter of each group
     std::vector<int32_t> group_history, group_new;  // history range start; new contacts count
     std::vector<MeshHistory> fresh;                 // new history, up to 4 slots per group
     MeshWrench wrench;
   };
   std::vector<MeshState> meshes;
   int64_t mesh_contacts = 0;
+  double mesh_worst = 0;         // deepest particle-mesh overlap / diameter at the last step
+  int64_t mesh_worst_id = -1;    // its particle
+  int mesh_worst_mesh = -1;      // and mesh
   int64_t awake = 0;
   int64_t sleep_counter = 0;  // steps since the last sleep check
   std::vector<int32_t> active;  // storage indices of the awake particles (sleep enabled)
@@ -903,6 +907,8 @@ void System::MeshForces() {
   constexpr int kMaxHits = 16, kMaxContacts = 4;
   int64_t total = 0;
   double worst_overlap = 0;
+  m.mesh_worst = 0;
+  m.mesh_worst_id = -1;
   for (int k = 0; k < static_cast<int>(m.meshes.size()); ++k) {
     Impl::MeshState& ms = m.meshes[k];
     const Pose& pose = ms.motion.pose;
@@ -919,6 +925,7 @@ void System::MeshForces() {
     ms.group_force.resize(ng);
     ms.group_torque.resize(ng);
     ms.group_mesh_torque.resize(ng);
+    ms.group_overlap.assign(ng, 0.0);
     ms.group_new.assign(ng, 0);
     ms.group_history.resize(ng + 1);
     ms.fresh.resize(static_cast<size_t>(kMaxContacts) * ng);
@@ -1009,6 +1016,7 @@ void System::MeshForces() {
         kept_normal[nk] = out;
         ++nk;
         worst = std::max(worst, delta / (2.0 * r));
+        ms.group_overlap[g] = std::max(ms.group_overlap[g], delta / (2.0 * r));
       }
       ms.group_force[g] = fi;
       ms.group_torque[g] = ti;
@@ -1021,6 +1029,11 @@ void System::MeshForces() {
     for (int g = 0; g < ng; ++g) {
       if (ms.group_new[g] == 0) continue;
       const int32_t i = ms.group_particle[g];
+      if (ms.group_overlap[g] > m.mesh_worst) {
+        m.mesh_worst = ms.group_overlap[g];
+        m.mesh_worst_id = p_.id[i];
+        m.mesh_worst_mesh = k;
+      }
       p_.f[i] += ms.group_force[g];
       p_.t[i] += ms.group_torque[g];
       wrench.force -= ms.group_force[g];
@@ -1211,9 +1224,18 @@ void System::Diagnose(StepStatus* status) const {
         id = p_.id[i];
       }
     }
+    std::string against;
+    if (m.mesh_worst > worst && m.mesh_worst_id >= 0) {
+      worst = m.mesh_worst;
+      id = m.mesh_worst_id;
+      const std::string& name = m.meshes[m.mesh_worst_mesh].mesh.name;
+      against = " against mesh '" + (name.empty() ? std::to_string(m.mesh_worst_mesh) : name) +
+                "' (a particle pinched by a moving mesh: keep walls a few diameters away from "
+                "its path, or lower its speed)";
+    }
     status->particle = id;
     msg << "particle " << id << " overlaps by " << 100.0 * worst
-        << "% of its diameter at t = " << time_ << " s (limit "
+        << "% of its diameter" << against << " at t = " << time_ << " s (limit "
         << 100.0 * config_.max_overlap_fraction
         << "%); lower time_step.rayleigh_fraction or raise the shear modulus";
   }
