@@ -27,4 +27,27 @@ struct MeshMotion {
   Vec3 angular_velocity;  // [rad/s], world frame
 };
 
+// Mass properties of the solid a closed triangle mesh bounds, at uniform density.
+struct MassProperties {
+  double volume = 0;    // [m^3]
+  double mass = 0;      // [kg] density * volume
+  Vec3 center_of_mass;  // [m] in the mesh's body frame
+  // Inertia tensor about the centre of mass, body axes [kg m^2]: I_ij = integral of
+  // (|r|^2 delta_ij - r_i r_j) dm, so the off-diagonal entries are the negated products of
+  // inertia (the URDF ixy, ixz, iyz convention). Symmetric.
+  std::array<std::array<double, 3>, 3> inertia{};
+};
+
+// Volume, mass, centre of mass and inertia of `mesh` at `density` [kg/m^3], exactly (up to
+// rounding) by the divergence theorem over its triangles: each volume integral of 1, x, y, z,
+// x^2, y^2, z^2, xy, yz, zx becomes a sum over the surface (Mirtich 1996; Eberly, "Polyhedral
+// Mass Properties (Revisited)", 2002). Coordinates are taken relative to the mean vertex first,
+// so a mesh far from its origin loses no digits.
+// Hazards: the mesh must be closed, with triangles counter-clockwise seen from outside; an open
+// mesh gives a meaningless answer. For a union of closed pieces that intersect (the scoop's
+// plates overlap at the joints), every overlap is counted once per piece that covers it.
+// Throws std::invalid_argument when density is not > 0, a vertex index is out of range or the
+// enclosed volume is not > 0 (an empty mesh, or one wound inside out).
+MassProperties ComputeMassProperties(const TriangleMesh& mesh, double density);
+
 }  // namespace dem
