@@ -1,0 +1,142 @@
+#include "sim/mesh_io.h"
+
+#include <assimp/config.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <array>
+#include <assimp/Importer.hpp>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+#include <utility>
+
+#include "sim/scene.h"
+
+namespace sim {
+
+namespace {
+
+constexpr const char* kExpected =
+    "expected a triangle mesh file that assimp reads (STL, OBJ, PLY, glTF, ...)";
+
+[[noreturn]] void Fail(const std::string& path, const std::string& what) {
+  throw InputError(path + ": " + what);
+}
+
+// An affine transform in double precision: x' = r x + t (rows of r).
+struct Affine {
+  std::array<std::array<double, 3>, 3> r{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  dem::Vec3 t;
+
+  dem::Vec3 Apply(const dem::Vec3& x) const {
+    return {r[0][0] * x.x + r[0][1] * x.y + r[0][2] * x.z + t.x,
+            r[1][0] * x.x + r[1][1] * x.y + r[1][2] * x.z + t.y,
+            r[2][0] * x.x + r[2][1] * x.y + r[2][2] * x.z + t.z};
+  }
+  double Determinant() const {
+    return r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1]) -
+           r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0]) +
+           r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
+  }
+};
+
+// assimp's node matrix (row-major, acting on column vectors; the last row is 0 0 0 1).
+Affine FromAssimp(const aiMatrix4x4& m) {
+  Affine a;
+  a.r = {{{m.a1, m.a2, m.a3}, {m.b1, m.b2, m.b3}, {m.c1, m.c2, m.c3}}};
+  a.t = {m.a4, m.b4, m.c4};
+  return a;
+}
+
+// parent o child: x -> parent(child(x)).
+Affine Compose(const Affine& parent, const Affine& child) {
+  Affine out;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      out.r[i][j] = parent.r[i][0] * child.r[0][j] + parent.r[i][1] * child.r[1][j] +
+                    parent.r[i][2] * child.r[2][j];
+    }
+  }
+  out.t = parent.Apply(child.t);
+  return out;
+}
+
+// Appends the triangles of every mesh under `node`, placed by the accumulated node transforms.
+void AppendNode(const aiScene& scene, const aiNode& node, const Affine& parent,
+                dem::TriangleMesh* out) {
+  const Affine global = Compose(parent, FromAssimp(node.mTransformation));
+  const bool mirrored = global.Determinant() < 0;
+  for (unsigned k = 0; k < node.mNumMeshes; ++k) {
+    const aiMesh& mesh = *scene.mMeshes[node.mMeshes[k]];
+    const int32_t base = static_cast<int32_t>(out->vertices.size());
+    for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+      const aiVector3D& p = mesh.mVertices[v];
+      out->vertices.push_back(global.Apply({p.x, p.y, p.z}));
+    }
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices != 3) continue;  // points and lines
+      std::array<int32_t, 3> tri{base + static_cast<int32_t>(face.mIndices[0]),
+                                 base + static_cast<int32_t>(face.mIndices[1]),
+                                 base + static_cast<int32_t>(face.mIndices[2])};
+      if (mirrored) std::swap(tri[1], tri[2]);
+      out->triangles.push_back(tri);
+    }
+  }
+  for (unsigned c = 0; c < node.mNumChildren; ++c) {
+    AppendNode(scene, *node.mChildren[c], global, out);
+  }
+}
+
+}  // namespace
+
+dem::TriangleMesh LoadMesh(const std::string& path, double scale) {
+  if (!(scale > 0) || !std::isfinite(scale)) {
+    std::ostringstream msg;
+    msg << "mesh scale must be a finite number > 0, got " << scale;
+    Fail(path, msg.str());
+  }
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    Fail(path, std::string("no such file; ") + kExpected);
+  }
+
+  // Positions only: with normals (flat-shaded STL) or texture coordinates still attached, the
+  // corners that faces share would not be joined.
+  Assimp::Importer importer;
+  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS,
+                              aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS |
+                                  aiComponent_COLORS | aiComponent_TEXCOORDS |
+                                  aiComponent_BONEWEIGHTS);
+  // Coordinates as written: no Collada up-axis turn (its unit is still applied).
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
+  const aiScene* scene = importer.ReadFile(
+      path, aiProcess_RemoveComponent | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+  if (scene == nullptr || scene->mRootNode == nullptr) {
+    std::string why = importer.GetErrorString();
+    std::replace(why.begin(), why.end(), '\n', ' ');  // one line
+    Fail(path, "cannot read the mesh (assimp: " + why + "); " + kExpected);
+  }
+
+  dem::TriangleMesh mesh;
+  mesh.name = path;
+  AppendNode(*scene, *scene->mRootNode, Affine{}, &mesh);
+  if (mesh.triangles.empty()) {
+    Fail(path, std::string("the file holds no triangle; ") + kExpected);
+  }
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+    dem::Vec3& v = mesh.vertices[i];
+    v *= scale;
+    if (!dem::IsFinite(v)) {
+      std::ostringstream msg;
+      msg << "vertex " << i << " is not finite (" << v.x << ", " << v.y << ", " << v.z
+          << "); expected finite coordinates";
+      Fail(path, msg.str());
+    }
+  }
+  return mesh;
+}
+
+}  // namespace sim
