@@ -1,5 +1,6 @@
 #include "sim/trajectory.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -110,8 +111,8 @@ Trajectory::Trajectory(const TrajectorySpec& spec) : spec_(spec) {
     }
     previous = name;
     previous_end = EndOf(*seg);
+    end_time_ = std::max(end_time_, previous_end);
   }
-  end_time_ = previous_end;
 }
 
 ScoopKinematics Trajectory::At(double t) const {
