@@ -428,8 +428,14 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
     Trajectory check(t);
     (void)check;
   } catch (const std::invalid_argument& e) {
-    Fail(file, LineOf(traj_node), "dig.trajectory", "segments in time order, not overlapping",
-         e.what());
+    // The message starts with the offending field ("linear.start: expected ..."); report it at
+    // that segment's line when the scene wrote it.
+    const std::string what = e.what();
+    const std::string field = what.substr(0, what.find(':'));
+    const std::string segment = field.substr(0, field.find('.'));
+    const YAML::Node at = traj_node[segment];
+    throw InputError(file + ":" + std::to_string(LineOf(at ? at : traj_node)) +
+                     ": dig.trajectory." + what);
   }
   if (!t.approach.enabled && !t.rotation1.enabled && !t.linear.enabled && !t.rotation2.enabled)
     Fail(file, LineOf(traj_node), "dig.trajectory", "at least one segment (preset or map)",

@@ -1,112 +1,133 @@
 #include "sim/trajectory.h"
 
+#include <algorithm>
 #include <cmath>
-#include <cstdio>
+#include <sstream>
 #include <stdexcept>
 #include <string>
-#include <vector>
+#include <utility>
 
 namespace sim {
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
+// A segment may start this much before the previous one ends: amount / speed rounds (0.028 m at
+// 0.14 m/s ends at 2.0000000000000004 s).
+constexpr double kOverlapSlack = 1e-9;  // [s]
 
-// Level orientation R0 = rpy(pi, 0, 0): l_scoop +x -> world +x, +y -> -y, +z -> -z.
-const dem::Quat kLevel{0.0, 1.0, 0.0, 0.0};
+using Segment = TrajectorySpec::Segment;
 
-std::string Seconds(double t) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6g s", t);
-  return buffer;
+double EndOf(const Segment& s) { return s.start + s.amount / s.speed; }
+
+// How far the segment has gone at time t [m or rad]: exactly `amount` once it has ended.
+double Progress(const Segment& s, double t) {
+  if (!s.enabled || t <= s.start) return 0;
+  if (t >= EndOf(s)) return s.amount;
+  return s.speed * (t - s.start);
 }
 
-double SegmentEnd(const TrajectorySpec::Segment& s) { return s.start + s.amount / s.speed; }
+// The segment's speed while it is active ([start, end)), else 0.
+double Rate(const Segment& s, double t) {
+  return s.enabled && t >= s.start && t < EndOf(s) ? s.speed : 0;
+}
 
-// Progress of a segment at time t: the amount done so far, in [0, amount], and whether the
-// segment is running (its rate applies).
-double Done(const TrajectorySpec::Segment& s, double t, bool* running) {
-  *running = false;
-  if (!s.enabled || t <= s.start) return 0.0;
-  const double end = SegmentEnd(s);
-  if (t >= end) return s.amount;
-  *running = true;
-  return s.speed * (t - s.start);
+[[noreturn]] void Invalid(const std::string& field, const std::string& expected, double got) {
+  std::ostringstream msg;
+  msg << field << ": expected " << expected << ", got " << got;
+  throw std::invalid_argument(msg.str());
+}
+
+void CheckFinite(const std::string& field, const dem::Vec3& v) {
+  if (!dem::IsFinite(v)) {
+    std::ostringstream msg;
+    msg << field << ": expected finite coordinates, got (" << v.x << ", " << v.y << ", " << v.z
+        << ")";
+    throw std::invalid_argument(msg.str());
+  }
 }
 
 }  // namespace
 
 TrajectorySpec Table1Preset() {
-  TrajectorySpec t;
-  t.initial_pitch = 90 * kDeg;
-  t.approach = {true, 1.8, 0.14, 0.14 * 0.2};
-  t.rotation1 = {true, 2.0, 90 * kDeg, 90 * kDeg};
-  t.linear = {true, 3.0, 0.3, 0.3};
-  t.rotation2 = {true, 4.0, 90 * kDeg, 90 * kDeg};
-  return t;
+  TrajectorySpec s;
+  s.initial_pitch = 90 * kDeg;
+  s.approach = {true, 1.8, 0.14, 0.028};  // until 2.0 s
+  s.rotation1 = {true, 2.0, 90 * kDeg, 90 * kDeg};
+  s.linear = {true, 3.0, 0.3, 0.3};
+  s.rotation2 = {true, 4.0, 90 * kDeg, 90 * kDeg};
+  return s;
 }
 
 TrajectorySpec Table4Preset() {
-  TrajectorySpec t;
-  t.initial_pitch = 90 * kDeg;
-  t.approach = {true, 0.0, 0.14, 0.14 * 0.2};
-  t.rotation1 = {true, 0.2, 30 * kDeg, 90 * kDeg};
-  t.linear = {true, 3.2, 0.1, 0.3};
-  t.rotation2 = {true, 6.2, 30 * kDeg, 90 * kDeg};
-  return t;
+  TrajectorySpec s;
+  s.initial_pitch = 90 * kDeg;
+  s.approach = {true, 0.0, 0.14, 0.028};  // for 0.2 s
+  // "Right after": each segment starts where the previous one ends, computed, so that rounding
+  // never makes two overlap.
+  s.rotation1 = {true, 0.2, 30 * kDeg, 90 * kDeg};
+  s.linear = {true, EndOf(s.rotation1), 0.1, 0.3};
+  s.rotation2 = {true, EndOf(s.linear), 30 * kDeg, 90 * kDeg};
+  return s;
+}
+
+dem::Quat PitchOrientation(double theta) {
+  const dem::Quat level{0, 1, 0, 0};  // rpy(pi, 0, 0): half-turn about x, written exactly
+  return dem::AxisAngle({0, 1, 0}, theta) * level;
 }
 
 Trajectory::Trajectory(const TrajectorySpec& spec) : spec_(spec) {
-  const char* names[4] = {"approach", "rotation1", "linear", "rotation2"};
-  const TrajectorySpec::Segment* segs[4] = {&spec.approach, &spec.rotation1, &spec.linear,
-                                            &spec.rotation2};
-  double previous_end = -1e300;
+  CheckFinite("pivot_offset", spec.pivot_offset);
+  CheckFinite("pivot_start", spec.pivot_start);
+  if (!std::isfinite(spec.initial_pitch)) {
+    Invalid("initial_pitch", "a finite angle [rad]", spec.initial_pitch);
+  }
+  const std::pair<const char*, const Segment*> segments[] = {{"approach", &spec.approach},
+                                                             {"rotation1", &spec.rotation1},
+                                                             {"linear", &spec.linear},
+                                                             {"rotation2", &spec.rotation2}};
   const char* previous = nullptr;
-  for (int i = 0; i < 4; ++i) {
-    const TrajectorySpec::Segment& s = *segs[i];
-    if (!s.enabled) continue;
-    if (!(s.speed > 0) || !(s.amount > 0) || !(s.start >= 0) || !std::isfinite(s.start))
-      throw std::invalid_argument(std::string(names[i]) +
-                                  ": needs start >= 0, speed > 0 and amount > 0");
-    if (s.start < previous_end - 1e-12)
-      throw std::invalid_argument(std::string(names[i]) + " starts at " + Seconds(s.start) +
-                                  ", before " + previous + " ends at " + Seconds(previous_end));
-    previous_end = SegmentEnd(s);
-    previous = names[i];
+  double previous_end = 0;
+  for (const auto& [name, seg] : segments) {
+    if (!seg->enabled) continue;
+    const std::string n = name;
+    if (!(seg->start >= 0) || !std::isfinite(seg->start)) {
+      Invalid(n + ".start", "a finite time >= 0 [s]", seg->start);
+    }
+    if (!(seg->speed > 0) || !std::isfinite(seg->speed)) {
+      Invalid(n + ".speed", "a finite number > 0", seg->speed);
+    }
+    if (!(seg->amount >= 0) || !std::isfinite(seg->amount)) {
+      Invalid(n + ".amount", "a finite number >= 0", seg->amount);
+    }
+    if (previous != nullptr && seg->start < previous_end - kOverlapSlack) {
+      std::ostringstream msg;
+      msg << n << ".start: expected a time >= " << previous_end << " s (the end of " << previous
+          << "; segments run in the order approach, rotation1, linear, rotation2 without "
+             "overlapping), got "
+          << seg->start;
+      throw std::invalid_argument(msg.str());
+    }
+    previous = name;
+    previous_end = EndOf(*seg);
+    end_time_ = std::max(end_time_, previous_end);
   }
 }
 
-double Trajectory::end_time() const {
-  double end = 0;
-  for (const TrajectorySpec::Segment* s :
-       {&spec_.approach, &spec_.rotation1, &spec_.linear, &spec_.rotation2})
-    if (s->enabled) end = std::max(end, SegmentEnd(*s));
-  return end;
-}
-
-// Pose: the pivot (fixed in l_scoop at pivot_offset) moves down during the approach and along +x
-// during the linear segment; the pitch theta decreases during the rotations, which turn the
-// scoop about the world y axis through the pivot: R(theta) = R_y(theta) R0.
 ScoopKinematics Trajectory::At(double t) const {
+  const TrajectorySpec& s = spec_;
   ScoopKinematics k;
-  bool down = false, rot1 = false, lin = false, rot2 = false;
-  const double dz = Done(spec_.approach, t, &down);
-  const double a1 = Done(spec_.rotation1, t, &rot1);
-  const double dx = Done(spec_.linear, t, &lin);
-  const double a2 = Done(spec_.rotation2, t, &rot2);
-  k.pitch = spec_.initial_pitch - a1 - a2;
-  k.pivot = spec_.pivot_start + dem::Vec3{dx, 0.0, -dz};
-  k.pose.orientation = dem::AxisAngle({0, 1, 0}, k.pitch) * kLevel;
-  k.pose.position = k.pivot - dem::Rotate(k.pose.orientation, spec_.pivot_offset);
-  // Twist of the active segment (segments do not overlap).
-  dem::Vec3 v_pivot;
-  if (down) v_pivot.z = -spec_.approach.speed;
-  if (lin) v_pivot.x = spec_.linear.speed;
-  double pitch_rate = 0;
-  if (rot1) pitch_rate = -spec_.rotation1.speed;
-  if (rot2) pitch_rate = -spec_.rotation2.speed;
-  k.angular_velocity = {0.0, pitch_rate, 0.0};
-  k.velocity = v_pivot + dem::Cross(k.angular_velocity, k.pose.position - k.pivot);
+  // Pivot: down by the approach, forward by the linear push; pitch: down by both rotations.
+  k.pivot = s.pivot_start + dem::Vec3{Progress(s.linear, t), 0, -Progress(s.approach, t)};
+  k.pitch = s.initial_pitch - Progress(s.rotation1, t) - Progress(s.rotation2, t);
+  k.pose.orientation = PitchOrientation(k.pitch);
+  k.pose.position = k.pivot - dem::Rotate(k.pose.orientation, s.pivot_offset);
+
+  // Twist: d(pitch)/dt about world +y; the origin moves with the pivot plus w x (origin - pivot).
+  const dem::Vec3 pivot_velocity{Rate(s.linear, t), 0, -Rate(s.approach, t)};
+  k.angular_velocity = {0, -(Rate(s.rotation1, t) + Rate(s.rotation2, t)), 0};
+  k.velocity = pivot_velocity + dem::Cross(k.angular_velocity, k.pose.position - k.pivot);
   return k;
 }
 

@@ -232,7 +232,7 @@ sleep: {enabled: true}
       {"mesh: ", "mesh: /nonexistent/", ":6: dig.scoop.mesh: expected the path of a readable mesh file"},
       {"material: aluminium", "material: gold", ":6: dig.scoop.material: expected a material defined in"},
       {"speed: 0.3", "speed: -0.3", ":10: dig.trajectory.linear.speed: expected a number > 0, got -0.3"},
-      {"start: 3.0", "start: 2.5", ":8: dig.trajectory: expected segments in time order, not overlapping, got linear starts at 2.5 s, before rotation1 ends at 3 s"},
+      {"start: 3.0", "start: 2.5", ":10: dig.trajectory.linear.start: expected a time >= 3 s"},
       {"material: aluminium}", "material: aluminium, density: 2700, mass: 0.3}",
        ":6: dig.scoop.density: expected either density (mass properties from the mesh) or mass and com, got both"},
       {"material: aluminium}", "material: aluminium, density: -1}",

@@ -1,0 +1,81 @@
+#!/usr/bin/python3
+"""tools/plot_wrench.py on synthetic run files: writes a PNG for one and several runs, every frame
+and a single pass; a missing dataset or file gives one line and exit status 2."""
+
+import os
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+SCRIPT = os.path.join(ROOT, "tools", "plot_wrench.py")
+
+
+def make_run(path, passes=2, n=400, drop=None, seed=0):
+    """A run file shaped like scoopsim's: per pass, rho 0..0.45 m and a noisy wrench."""
+    rng = np.random.default_rng(seed)
+    rho = np.tile(np.linspace(0.0, 0.45, n), passes)
+    pass_ = np.repeat(np.arange(1, passes + 1), n).astype(float)
+    time = np.arange(rho.size) * 1e-3
+    base = np.stack([np.sin(8 * rho), 0.1 * rho, -2 * rho * pass_], axis=1)
+    data = {"time": time, "pass": pass_, "rho": rho, "pose": np.zeros((rho.size, 7)),
+            "collected_mass": 0.01 * np.arange(1, passes + 1)}
+    for frame in ("body", "scoop", "world"):
+        data["force_" + frame] = base + 0.2 * rng.standard_normal(base.shape)
+        data["torque_" + frame] = 0.05 * base + 0.01 * rng.standard_normal(base.shape)
+    with h5py.File(path, "w") as f:
+        for name, value in data.items():
+            if name != drop:
+                f["scoop/" + name] = value
+
+
+def run(args):
+    return subprocess.run([sys.executable, SCRIPT] + args, capture_output=True, text=True)
+
+
+def check_png(result, path, what):
+    assert result.returncode == 0, "%s: exit %d: %s" % (what, result.returncode, result.stderr)
+    with open(path, "rb") as f:
+        head = f.read(8)
+    assert head == b"\x89PNG\r\n\x1a\n", "%s: %s is not a PNG" % (what, path)
+    assert os.path.getsize(path) > 10000, "%s: %s is nearly empty" % (what, path)
+
+
+def main():
+    with tempfile.TemporaryDirectory() as d:
+        a, b = os.path.join(d, "ice_bd15.h5"), os.path.join(d, "snow_bd15.h5")
+        make_run(a, seed=1)
+        make_run(b, passes=3, seed=2)
+
+        png = os.path.join(d, "one.png")
+        check_png(run([a, "-o", png]), png, "one run, body frame")
+        for frame in ("scoop", "world"):
+            png = os.path.join(d, frame + ".png")
+            check_png(run([a, b, "-o", png, "--frame", frame, "--pass", "2", "--smooth", "10",
+                           "--labels", "ice,snow"]), png, "two runs, %s frame, pass 2" % frame)
+        png = os.path.join(d, "sub", "raw.png")
+        check_png(run([b, "-o", png, "--smooth", "1"]), png, "no smoothing, new folder")
+
+        # Bad input: one line on stderr, exit 2.
+        broken = os.path.join(d, "broken.h5")
+        make_run(broken, drop="torque_body")
+        for args, needle in (([broken, "-o", os.path.join(d, "x.png")], "/scoop/torque_body"),
+                             ([os.path.join(d, "none.h5"), "-o", os.path.join(d, "x.png")],
+                              "no such file"),
+                             ([a, "-o", os.path.join(d, "x.png"), "--pass", "7"], "--pass 7"),
+                             ([a, b, "-o", os.path.join(d, "x.png"), "--labels", "one"],
+                              "--labels")):
+            result = run(args)
+            assert result.returncode == 2, "%s: exit %d, expected 2" % (args, result.returncode)
+            lines = result.stderr.strip().splitlines()
+            assert len(lines) == 1 and needle in lines[0], "%s: stderr %r" % (args, result.stderr)
+        assert not os.path.exists(os.path.join(d, "x.png"))
+    print("plot_wrench_test: 4 plots written, 4 bad inputs refused with exit 2")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

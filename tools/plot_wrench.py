@@ -1,0 +1,185 @@
+#!/usr/bin/python3
+"""Plots the wrench on the scoop against rho, the way the paper's figures do.
+
+    tools/plot_wrench.py RUN.h5 [RUN2.h5 ...] -o PLOT.png [--frame body|scoop|world]
+                         [--pass N] [--smooth W] [--labels A,B,...] [--title TEXT]
+
+Reads the scoop time series of scoopsim run files (SI units):
+  /scoop/time (n) [s], /scoop/pass (n), /scoop/rho (n) [m],
+  /scoop/force_<frame>, /scoop/torque_<frame> (n x 3) [N], [N m],
+  /scoop/collected_mass (P) [kg] (optional: added to the legend).
+Draws |F| and |T| on the top row, Fx Fy Fz and Tx Ty Tz of the chosen frame (default body: the
+paper's Fig. 1 frame) below, against rho in mm (0..450 like the paper). Each series is drawn raw
+(thin, light) and smoothed by a centred moving average over --smooth samples (odd; 1 = none).
+One line per run and pass: all passes, or only pass N with --pass N. Legend: the file stem, or
+--labels.
+
+Exit status: 0 written; 2 bad input (a missing file or dataset, an empty selection), one line on
+stderr. Needs python3-numpy, python3-h5py and python3-matplotlib (tools/install-deps.sh).
+"""
+
+import argparse
+import os
+import sys
+
+import h5py
+import numpy as np
+
+FRAMES = ("body", "scoop", "world")
+REQUIRED = ("time", "pass", "rho")
+
+
+class InputError(Exception):
+    """Bad input: the message is the one line to print."""
+
+
+def open_run(path):
+    if not os.path.isfile(path):
+        raise InputError("%s: no such file (expected a scoopsim run file, .h5)" % path)
+    try:
+        return h5py.File(path, "r", swmr=True)  # readable while the run is still writing
+    except (OSError, ValueError):
+        pass
+    try:
+        return h5py.File(path, "r")
+    except OSError as e:
+        raise InputError("%s: cannot open as HDF5 (%s)" % (path, e))
+
+
+def read_run(path, frame):
+    """Dict of numpy arrays: time, pass (int), rho, force, torque, collected_mass (or None)."""
+    with open_run(path) as f:
+        names = list(REQUIRED) + ["force_" + frame, "torque_" + frame]
+        for name in names:
+            if "scoop/" + name not in f:
+                raise InputError("%s: missing dataset /scoop/%s (expected a scoopsim run file "
+                                 "with the scoop time series)" % (path, name))
+        run = {name: np.asarray(f["scoop/" + name][()], dtype=float) for name in names}
+        mass = f["scoop/collected_mass"][()] if "scoop/collected_mass" in f else None
+    n = run["time"].shape[0]
+    for name in names:
+        want = (n, 3) if name.startswith(("force", "torque")) else (n,)
+        if run[name].shape != want:
+            raise InputError("%s: /scoop/%s has shape %s, expected %s"
+                             % (path, name, run[name].shape, want))
+    return {
+        "time": run["time"],
+        "pass": np.rint(run["pass"]).astype(int),
+        "rho": run["rho"],
+        "force": run["force_" + frame],
+        "torque": run["torque_" + frame],
+        "collected_mass": None if mass is None else np.atleast_1d(np.asarray(mass, dtype=float)),
+    }
+
+
+def smooth(y, window):
+    """Centred moving average over `window` samples (odd), ignoring NaN; the ends average over
+    the samples that exist, so they are not pulled toward zero."""
+    window = min(window, y.size if y.size % 2 == 1 else y.size - 1)  # "same" needs <= n
+    if window <= 1:
+        return y
+    kernel = np.ones(window)
+    valid = np.isfinite(y)
+    total = np.convolve(np.where(valid, y, 0.0), kernel, mode="same")
+    count = np.convolve(valid.astype(float), kernel, mode="same")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+
+
+def series(runs, labels, pass_filter):
+    """[(label, rho_mm, force (n x 3), torque (n x 3))], one per run and pass."""
+    out = []
+    for run, label in zip(runs, labels):
+        passes = sorted(set(run["pass"].tolist()))
+        if pass_filter is not None:
+            passes = [p for p in passes if p == pass_filter]
+        for p in passes:
+            rows = run["pass"] == p
+            text = label if len(passes) == 1 and pass_filter is None else "%s pass %d" % (label, p)
+            mass = run["collected_mass"]
+            if mass is not None and 1 <= p <= mass.size:
+                text += " (%.1f g)" % (1e3 * mass[p - 1])
+            out.append((text, 1e3 * run["rho"][rows], run["force"][rows], run["torque"][rows]))
+    return out
+
+
+def plot(lines, frame, window, title, out_path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(13, 9), constrained_layout=True)
+    grid = fig.add_gridspec(3, 6)
+    panels = [
+        (fig.add_subplot(grid[0, 0:3]), "|F| [N]", lambda f, t: np.linalg.norm(f, axis=1)),
+        (fig.add_subplot(grid[0, 3:6]), "|T| [N m]", lambda f, t: np.linalg.norm(t, axis=1)),
+    ]
+    for i, axis in enumerate("xyz"):
+        panels.append((fig.add_subplot(grid[1, 2 * i:2 * i + 2]), "F%s [N]" % axis,
+                       lambda f, t, i=i: f[:, i]))
+    for i, axis in enumerate("xyz"):
+        panels.append((fig.add_subplot(grid[2, 2 * i:2 * i + 2]), "T%s [N m]" % axis,
+                       lambda f, t, i=i: t[:, i]))
+
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    rho_max = max([450.0] + [float(np.nanmax(r)) for _, r, _, _ in lines if r.size])
+    for ax, ylabel, value in panels:
+        for k, (label, rho, force, torque) in enumerate(lines):
+            colour = colours[k % len(colours)]
+            y = value(force, torque)
+            ax.plot(rho, y, color=colour, linewidth=0.5, alpha=0.3)
+            ax.plot(rho, smooth(y, window), color=colour, linewidth=1.5, label=label)
+        ax.set_xlim(0, rho_max)
+        ax.set_xlabel("rho [mm]")
+        ax.set_ylabel(ylabel)
+        ax.grid(True, linewidth=0.3)
+    panels[0][0].legend(fontsize="small")
+    fig.suptitle(title or "Wrench on the scoop, %s frame (raw and %d-sample moving average)"
+                 % (frame, window))
+    fig.savefig(out_path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description="Plot the scoop wrench of scoopsim runs "
+                                     "against rho.")
+    parser.add_argument("runs", nargs="+", metavar="RUN.h5", help="scoopsim run files")
+    parser.add_argument("-o", "--output", required=True, metavar="PLOT.png", help="image to write")
+    parser.add_argument("--frame", choices=FRAMES, default="body",
+                        help="frame of the components (default body, paper Fig. 1)")
+    parser.add_argument("--pass", dest="pass_", type=int, metavar="N",
+                        help="plot only pass N (default: every pass)")
+    parser.add_argument("--smooth", type=int, default=25, metavar="W",
+                        help="moving-average window in samples, made odd (default 25; 1 = none)")
+    parser.add_argument("--labels", help="comma-separated legend labels, one per run "
+                        "(default: file stems)")
+    parser.add_argument("--title", help="figure title")
+    args = parser.parse_args(argv)
+
+    try:
+        if args.smooth < 1:
+            raise InputError("--smooth: expected a window >= 1 sample, got %d" % args.smooth)
+        window = args.smooth if args.smooth % 2 == 1 else args.smooth + 1
+        labels = [os.path.splitext(os.path.basename(p))[0] for p in args.runs]
+        if args.labels is not None:
+            labels = args.labels.split(",")
+            if len(labels) != len(args.runs):
+                raise InputError("--labels: expected %d labels (one per run), got %d"
+                                 % (len(args.runs), len(labels)))
+        runs = [read_run(p, args.frame) for p in args.runs]
+        lines = series(runs, labels, args.pass_)
+        if not lines:
+            raise InputError("--pass %s: no rows of that pass in %s"
+                             % (args.pass_, ", ".join(args.runs)))
+        out_dir = os.path.dirname(os.path.abspath(args.output))
+        os.makedirs(out_dir, exist_ok=True)
+        plot(lines, args.frame, window, args.title, args.output)
+    except InputError as e:
+        print("plot_wrench: %s" % e, file=sys.stderr)
+        return 2
+    print("plot_wrench: wrote %s (%d lines, %s frame)" % (args.output, len(lines), args.frame))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
