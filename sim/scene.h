@@ -38,6 +38,20 @@ struct OutputSpec {
   double flush_seconds = 10.0;  // wall-clock flush period [s]
 };
 
+// Frames (key `render:`, optional): camera, colouring and size of the OSMesa frames written by
+// `scoopsim run --frames DIR`. Plain data: sim knows nothing of render/, which reads this.
+struct RenderSpec {
+  std::string camera_preset = "trench_oblique";  // one of kRenderCameraPresets; "" = explicit
+  dem::Vec3 camera_position, camera_target;      // explicit camera [m] (camera: {position, ...})
+  double fov_deg = 35;                           // vertical field of view [deg], in (0, 180)
+  std::string color_by = "speed";                // speed | depth | material | force
+  int width = 1280, height = 720;                // [px], each in [16, 4096]
+  double every = 0;                              // [s] between frames; 0 = output.interval
+};
+// Camera presets a scene may name (render/camera.cpp frames each; a render test checks both
+// lists agree).
+inline const char* const kRenderCameraPresets[] = {"trench_side", "trench_oblique", "top"};
+
 struct Scene {
   std::string path;       // the scene file as given
   std::string yaml_text;  // its full text (stored as the HDF5 attribute scene_yaml)
@@ -53,6 +67,7 @@ struct Scene {
   double duration = 0;  // simulated time of `scoopsim run` [s]
   OutputSpec output;
   int threads = 0;  // 0 = all cores (CLI --threads overrides)
+  RenderSpec render;
 };
 
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.
