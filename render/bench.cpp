@@ -32,12 +32,14 @@ int BenchRender(const BenchRenderOptions& options) {
   // The bed: lattice layers of pitch 3.6 mm (spheres of 3.5 mm diameter), every other layer
   // shifted by half a pitch, each centre jittered by up to 0.04 mm (keeps the 0.1 mm gap open).
   constexpr double kRadius = 1.75e-3, kPitch = 3.6e-3;
-  const dem::Vec3 box_min{0, 0, 0}, box_max{0.4, 0.3, 0.2};
-  const int nx = static_cast<int>((box_max.x - box_min.x) / kPitch) - 1;
-  const int ny = static_cast<int>((box_max.y - box_min.y) / kPitch) - 1;
+  const dem::Vec3 box_min{0, 0, 0};
+  const double box_x = 0.4, box_y = 0.3;
+  const int nx = static_cast<int>(box_x / kPitch) - 1;
+  const int ny = static_cast<int>(box_y / kPitch) - 1;
   const int64_t per_layer = static_cast<int64_t>(nx) * ny;
   const int64_t layers = (options.particles + per_layer - 1) / per_layer;
   const double top = kRadius + (layers - 1) * kPitch;
+  const dem::Vec3 box_max{box_x, box_y, top + 0.05};  // 5 cm of headroom above the bed
   dem::Rng rng(7);
   dem::Particles p;
   p.x.reserve(options.particles);
@@ -68,6 +70,7 @@ int BenchRender(const BenchRenderOptions& options) {
   frame_options.settings.camera.height = options.height;
   frame_options.camera_preset = "trench_oblique";
   frame_options.png_level = options.png_level;
+  frame_options.settings.cull_hidden = options.cull_hidden;
   frame_options.threads = options.threads;
   double png_bytes = 0;
   double wall = 0;
@@ -106,14 +109,17 @@ int BenchRender(const BenchRenderOptions& options) {
   std::error_code ignored;
   if (options.keep_dir.empty()) fs::remove_all(dir, ignored);
   const char* lp = std::getenv("LP_NUM_THREADS");
+  const int threads = lp != nullptr && std::atoi(lp) > 0
+                          ? std::atoi(lp)
+                          : static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
   const int n = std::max(frames_done, 1);
   std::printf(
       "{\"bench\":\"render\",\"particles\":%lld,\"frames\":%d,\"width\":%d,\"height\":%d,"
-      "\"lp_num_threads\":\"%s\",\"png_level\":%d,\"fps\":%.3f,\"draw_ms\":%.2f,\"png_ms\":%.2f,"
+      "\"threads\":%d,\"png_level\":%d,\"cull\":%s,\"fps\":%.3f,\"draw_ms\":%.2f,\"png_ms\":%.2f,"
       "\"png_kb\":%.1f,\"drawn\":%zu,\"renderer\":\"%s\"}\n",
       static_cast<long long>(options.particles), frames_done, options.width, options.height,
-      lp ? lp : "", options.png_level, frames_done / wall, 1e3 * draw_s / n, 1e3 * png_s / n,
-      png_bytes / n / 1024.0, drawn, description.c_str());
+      threads, options.png_level, options.cull_hidden ? "true" : "false", frames_done / wall,
+      1e3 * draw_s / n, 1e3 * png_s / n, png_bytes / n / 1024.0, drawn, description.c_str());
   return 0;
 }
 

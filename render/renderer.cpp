@@ -545,9 +545,9 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
 std::string Caption(const sim::WorldView& view) {
   std::string text = "t = " + Format("%.5f", view.time) + " s";
   if (view.pass > 0) {
-    text += "   pass " + std::to_string(view.pass) + "   rho = " + Format("%.4f", view.rho) +
-            " m   |F| = " + Format("%.3g", view.force) + " N";
+    text += "   pass " + std::to_string(view.pass) + "   rho = " + Format("%.4f", view.rho) + " m";
   }
+  if (view.pass > 0 || view.force > 0) text += "   |F| = " + Format("%.3g", view.force) + " N";
   return text;
 }
 

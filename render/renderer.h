@@ -72,7 +72,8 @@ class Renderer {
   std::unique_ptr<Impl> impl_;
 };
 
-// Caption text for a view: "t = 0.01234 s", plus pass, rho and |F| when the view has a dig.
+// Caption text for a view: "t = 0.01234 s", plus pass and rho when the view has a dig (pass > 0)
+// and |F| when it has a dig or a force.
 std::string Caption(const sim::WorldView& view);
 
 }  // namespace render

@@ -199,6 +199,8 @@ int Main(int argc, char** argv) {
   bench_render->add_option("--keep", render_bench.keep_dir,
                            "Write the frames into this folder and keep them (default: a temporary "
                            "folder, removed)");
+  bench_render->add_flag("!--no-cull", render_bench.cull_hidden,
+                         "Hand every particle to GL (no occlusion culling), to measure it");
   bench_render->add_option("--png-level", render_bench.png_level, "zlib level of the PNGs")
       ->capture_default_str()
       ->check(CLI::Range(0, 9));
