@@ -205,6 +205,7 @@ struct Renderer::Impl {
   };
   std::vector<Footprint> footprints;
   std::vector<float> cells;
+  std::vector<float> blocks;  // farthest cell value of each 4 x 4 block
   std::vector<uint32_t> visible;
 
   void Bind(int width, int height) {
@@ -410,9 +411,11 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
         f.py = static_cast<float>(0.5 * camera.height + sy * cy / z);
         f.depth = static_cast<float>(z);
         const double dist = std::sqrt(cx * cx + cy * cy + z * z);
-        // The sprite's half size (as in the vertex shader) plus a pixel of margin; the radius of
-        // the disk surely inside the silhouette, less a margin for rounding.
-        f.half = static_cast<float>(pixel_scale * r / std::sqrt(z * z - r * r) * dist / z + 2.0);
+        // The radius of a disk surely holding the silhouette: its semi-major axis, which the
+        // vertex shader also sizes the sprite by, plus a pixel for the ellipse's offset from the
+        // projected centre (a fraction of a pixel) and rounding; the radius of the disk surely
+        // inside the silhouette, less a margin for rounding.
+        f.half = static_cast<float>(pixel_scale * r / std::sqrt(z * z - r * r) * dist / z + 1.0);
         f.inner = static_cast<float>(0.98 * pixel_scale * r / dist - 0.02);
         if (f.inner <= 0) continue;
         const float back = static_cast<float>(z + r);
@@ -430,23 +433,45 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
           }
         }
       }
-      // Pass 2: a sphere is hidden when at every pixel its sprite could cover, something lies
-      // nearer than its front (centre depth - r).
+      // Blocks of kBlock x kBlock pixels keep their farthest value, so pass 2 skips a block
+      // that is nearer than a sphere's front everywhere without reading its pixels.
+      constexpr int kBlock = 4;
+      const int bw = (w + kBlock - 1) / kBlock, bh = (h + kBlock - 1) / kBlock;
+      m.blocks.assign(static_cast<size_t>(bw) * bh, 0.0f);
+      for (int yy = 0; yy < h; ++yy) {
+        const float* row = m.cells.data() + static_cast<size_t>(yy) * w;
+        float* block_row = m.blocks.data() + static_cast<size_t>(yy / kBlock) * bw;
+        for (int xx = 0; xx < w; ++xx) {
+          block_row[xx / kBlock] = std::max(block_row[xx / kBlock], row[xx]);
+        }
+      }
+      // Pass 2: a sphere is hidden when at every pixel centre its silhouette could cover,
+      // something lies nearer than its front (centre depth - r).
       for (size_t i = 0; i < n; ++i) {
         const Impl::Footprint& f = m.footprints[i];
         if (f.depth < 0) continue;
         const float front = f.depth - static_cast<float>(p.radius[i]);
+        const float r2 = f.half * f.half;
         const int x0 = std::max(static_cast<int>(std::floor(f.px - f.half)), 0);
         const int x1 = std::min(static_cast<int>(std::floor(f.px + f.half)), w - 1);
         const int y0 = std::max(static_cast<int>(std::floor(f.py - f.half)), 0);
         const int y1 = std::min(static_cast<int>(std::floor(f.py + f.half)), h - 1);
         bool hidden = true;
-        for (int yy = y0; yy <= y1 && hidden; ++yy) {
-          const float* row = m.cells.data() + static_cast<size_t>(yy) * w;
-          for (int xx = x0; xx <= x1; ++xx) {
-            if (!(row[xx] < front)) {
-              hidden = false;
-              break;
+        for (int by = y0 / kBlock; by <= y1 / kBlock && hidden; ++by) {
+          for (int bx = x0 / kBlock; bx <= x1 / kBlock && hidden; ++bx) {
+            if (m.blocks[static_cast<size_t>(by) * bw + bx] < front) continue;
+            const int ya = std::max(y0, by * kBlock), yb = std::min(y1, by * kBlock + kBlock - 1);
+            const int xa = std::max(x0, bx * kBlock), xb = std::min(x1, bx * kBlock + kBlock - 1);
+            for (int yy = ya; yy <= yb && hidden; ++yy) {
+              const float dy = yy + 0.5f - f.py;
+              const float* row = m.cells.data() + static_cast<size_t>(yy) * w;
+              for (int xx = xa; xx <= xb; ++xx) {
+                const float dx = xx + 0.5f - f.px;
+                if (dx * dx + dy * dy <= r2 && !(row[xx] < front)) {
+                  hidden = false;
+                  break;
+                }
+              }
             }
           }
         }

@@ -53,10 +53,12 @@ class Renderer {
   // Occlusion culling (settings.cull_hidden): llvmpipe shades every sprite fragment because the
   // impostors write their own depth (no early depth test), and its vertex stage runs on one
   // thread, so a deep bed would cost in proportion to all its particles though only the top
-  // layers show. Before drawing, the particles are projected on the CPU; every pixel centre
-  // surely inside a sphere's silhouette records the nearest "back" (centre depth + r) over such
-  // spheres; a sphere whose sprite square lies wholly on pixels with something nearer than its
-  // own front (centre depth - r) cannot show and is not handed to GL.
+  // layers show. Before drawing, the particles are projected on the CPU. Pass 1: every pixel
+  // centre surely inside a sphere's silhouette records the nearest "back" (centre depth + r) of
+  // such spheres. Pass 2: a sphere with something nearer than its own front (centre depth - r)
+  // at every pixel centre its silhouette could cover (a disk of the silhouette's semi-major axis
+  // plus 1 px) cannot show, and is not handed to GL. 4 x 4 blocks of pixels keep their farthest
+  // value, so pass 2 mostly reads one value per block.
   const Image& Render(const sim::WorldView& view, const RenderSettings& settings);
 
   // The last rendered image (empty before the first Render()).
