@@ -41,7 +41,7 @@ d = json.loads(sys.argv[1])
 with open(sys.argv[2], "a") as f:
     f.write(",".join(str(x) for x in [datetime.datetime.utcnow().isoformat(timespec="seconds"),
         d["particles"], d["frames"], d["width"], d["height"], d["threads"], d["png_level"],
-        d["cull"], d["fps"], d["draw_ms"], d["png_ms"], d["png_kb"], d["drawn"]]) + "\n")
+        str(d["cull"]).lower(), d["fps"], d["draw_ms"], d["png_ms"], d["png_kb"], d["drawn"]]) + "\n")
 PY
     runs+=("$line")
   done
