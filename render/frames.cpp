@@ -30,7 +30,16 @@ FrameOptions FrameOptionsFromSpec(const sim::RenderSpec& spec) {
 }
 
 FrameSequence::FrameSequence(FrameOptions options) : options_(std::move(options)) {
-  std::filesystem::create_directories(options_.dir);
+  namespace fs = std::filesystem;
+  fs::create_directories(options_.dir);
+  // Frames of an earlier, longer sequence would otherwise trail this one (and its video).
+  for (const fs::directory_entry& entry : fs::directory_iterator(options_.dir)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_regular_file() && name.size() == 16 && name.compare(0, 6, "frame_") == 0 &&
+        name.compare(12, 4, ".png") == 0 && name.find_first_not_of("0123456789", 6) == 12) {
+      fs::remove(entry.path());
+    }
+  }
   renderer_ = std::make_unique<Renderer>(options_.threads);
 }
 

@@ -27,7 +27,9 @@ FrameOptions FrameOptionsFromSpec(const sim::RenderSpec& spec);
 
 class FrameSequence {
  public:
-  explicit FrameSequence(FrameOptions options);  // creates the folder and the renderer
+  // Creates the folder (removing frame_NNNNNN.png files an earlier sequence left there) and the
+  // renderer.
+  explicit FrameSequence(FrameOptions options);
   ~FrameSequence();
 
   // Renders `view` and writes the next numbered frame. Call between DEM steps only.

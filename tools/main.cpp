@@ -117,13 +117,17 @@ struct FramesArgs {
     return options;
   }
 
-  // --video: DIR.mp4 next to the folder, at 25 frames/s; says why when there is none.
+  // --video: DIR.mp4 next to the folder (DIR/frames.mp4 for "." or ".."), at 25 frames/s;
+  // says why when there is none.
   void MaybeVideo() const {
     if (!video) return;
-    std::string path = dir;
-    while (path.size() > 1 && path.back() == '/') path.pop_back();
+    const std::filesystem::path folder = std::filesystem::path(dir).lexically_normal();
+    const std::string name = folder.filename().string();
+    const std::string mp4 = (name.empty() || name == "." || name == "..")
+                                ? (folder / "frames.mp4").string()
+                                : (folder.parent_path() / (name + ".mp4")).string();
     std::string message;
-    render::AssembleVideo(dir, path + ".mp4", 25, &message);
+    render::AssembleVideo(dir, mp4, 25, &message);
     std::fprintf(stderr, "scoopsim: %s\n", message.c_str());
   }
 };

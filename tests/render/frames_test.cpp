@@ -158,9 +158,10 @@ TEST(FramesTest, SceneRenderBlock) {
 }
 
 // The CLI: `scoopsim run --frames` writes a frame at t0 and every --every seconds, and
-// `scoopsim render` writes one frame per snapshot of the run's file. 200 spheres, 0.003 s run
-// at dt = 6.4e-6 s with a frame every 1e-3 s: frames at 0, 1, 2, 3 ms (the last step ends at or
-// just past 3 ms) = 4; snapshots every 200 steps (1.3 ms) plus t0 = 3.
+// `scoopsim render` writes one frame per snapshot of the run's file, replacing the frames an
+// earlier sequence left in the folder. 200 spheres, 0.003 s run at dt = 6.4e-6 s with a frame
+// every 1e-3 s: frames at 0, 1, 2, 3 ms (the last step ends at or just past 3 ms) = 4; snapshots
+// every 200 steps (1.3 ms) plus t0 = 3.
 TEST(FramesTest, CliRunAndRenderWriteFrames) {
   const fs::path scene = TempDir() / "cli.yaml";
   std::ofstream(scene) << "materials: " << kSourceDir << "/scenes/materials.yaml\n"
@@ -183,13 +184,19 @@ render: {camera: trench_side, size: [320, 180]}
             0);
   EXPECT_EQ(CountFrames(live), 4);
 
+  // A frame left by an earlier, longer sequence goes; other files stay.
   const fs::path saved = TempDir() / "saved";
+  fs::create_directories(saved);
+  std::ofstream(saved / "frame_000007.png") << "stale";
+  std::ofstream(saved / "notes.txt") << "keep";
   const fs::path log = TempDir() / "render.log";
   ASSERT_EQ(Scoopsim("render " + out.string() + " --frames " + saved.string() +
                          " --threads 1 --quiet --color-by depth --camera top --video",
                      log.string()),
             0);
   EXPECT_EQ(CountFrames(saved), 3);
+  EXPECT_FALSE(fs::exists(saved / "frame_000007.png"));
+  EXPECT_TRUE(fs::exists(saved / "notes.txt"));
   std::ifstream in(log);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   // --video either made the MP4 or said that ffmpeg is missing.
