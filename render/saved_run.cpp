@@ -112,8 +112,17 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
   H5E_END_TRY;
   if (file_id < 0) throw sim::InputError(h5_path + ": not a readable HDF5 file");
   const Id file{file_id, H5Fclose};
-  // Missing optional objects are probed, not errors: keep HDF5 from printing its error stack.
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  // Missing optional objects are probed, not errors: keep HDF5 from printing its error stack
+  // while this file is read (restored on the way out).
+  struct QuietErrors {
+    H5E_auto2_t handler = nullptr;
+    void* data = nullptr;
+    QuietErrors() {
+      H5Eget_auto2(H5E_DEFAULT, &handler, &data);
+      H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    }
+    ~QuietErrors() { H5Eset_auto2(H5E_DEFAULT, handler, data); }
+  } quiet_errors;
 
   if (!Exists(file.id, "/snapshots")) {
     throw sim::InputError(h5_path + ": no /snapshots group (run with output.snapshot_every > 0)");
