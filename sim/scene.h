@@ -73,6 +73,10 @@ struct Scene {
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.
 Scene LoadScene(const std::string& path);
 
+// The `render:` block of a scene's text (for a saved run's stored scene); defaults when it has
+// none. `name` stands for the file in messages. Throws InputError like LoadScene.
+RenderSpec LoadRenderSpec(const std::string& yaml_text, const std::string& name);
+
 // Loads a materials file into `table` (materials and their pair interactions). Throws InputError.
 void LoadMaterials(const std::string& path, dem::MaterialTable* table);
 
