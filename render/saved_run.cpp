@@ -54,9 +54,10 @@ std::string StringAttribute(hid_t object, const char* name) {
   const Id attr{H5Aopen(object, name, H5P_DEFAULT), H5Aclose};
   const Id type{H5Aget_type(attr.id), H5Tclose};
   if (H5Tget_class(type.id) != H5T_STRING) return "";
+  // Read with a copy of the file's own type: a converted character set (sim writes UTF-8) would
+  // make HDF5 refuse the read.
+  const Id mem{H5Tcopy(type.id), H5Tclose};
   if (H5Tis_variable_str(type.id) > 0) {
-    const Id mem{H5Tcopy(H5T_C_S1), H5Tclose};
-    H5Tset_size(mem.id, H5T_VARIABLE);
     char* value = nullptr;
     if (H5Aread(attr.id, mem.id, &value) < 0 || value == nullptr) return "";
     std::string out(value);
@@ -64,8 +65,6 @@ std::string StringAttribute(hid_t object, const char* name) {
     return out;
   }
   std::vector<char> buffer(H5Tget_size(type.id) + 1, '\0');
-  const Id mem{H5Tcopy(H5T_C_S1), H5Tclose};
-  H5Tset_size(mem.id, buffer.size());
   if (H5Aread(attr.id, mem.id, buffer.data()) < 0) return "";
   return std::string(buffer.data());
 }
@@ -94,7 +93,28 @@ bool SceneBox(const std::string& yaml, dem::Vec3* lo, dem::Vec3* hi) {
   }
 }
 
+// Opens a run's file read-only, the SWMR way when it is still open for writing (a run in
+// progress, or one that was killed).
+hid_t OpenRun(const std::string& h5_path) {
+  hid_t file_id = H5I_INVALID_HID;
+  H5E_BEGIN_TRY {
+    file_id = H5Fopen(h5_path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (file_id < 0) {
+      file_id = H5Fopen(h5_path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
+    }
+  }
+  H5E_END_TRY;
+  if (file_id < 0) throw sim::InputError(h5_path + ": not a readable HDF5 file");
+  return file_id;
+}
+
 }  // namespace
+
+std::string ReadSceneYaml(const std::string& h5_path) {
+  const Id file{OpenRun(h5_path), H5Fclose};
+  const Id root{H5Gopen2(file.id, "/", H5P_DEFAULT), H5Gclose};
+  return StringAttribute(root.id, "scene_yaml");
+}
 
 int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet) {
   if (frames->options().settings.color_by == ColorField::kForce) {
@@ -102,16 +122,7 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
                           ": cannot colour by force: snapshots store no forces (use "
                           "speed, depth or material, or render while running with --frames)");
   }
-  hid_t file_id = H5I_INVALID_HID;
-  H5E_BEGIN_TRY {
-    file_id = H5Fopen(h5_path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-    // A run still being written (or killed) is open for SWMR writing: read it the SWMR way.
-    if (file_id < 0)
-      file_id = H5Fopen(h5_path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
-  }
-  H5E_END_TRY;
-  if (file_id < 0) throw sim::InputError(h5_path + ": not a readable HDF5 file");
-  const Id file{file_id, H5Fclose};
+  const Id file{OpenRun(h5_path), H5Fclose};
   // Missing optional objects are probed, not errors: keep HDF5 from printing its error stack
   // while this file is read (restored on the way out).
   struct QuietErrors {

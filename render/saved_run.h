@@ -17,4 +17,8 @@ namespace render {
 // (force: snapshots store no forces).
 int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet);
 
+// The scene text stored in a saved run (root attribute scene_yaml); "" when it has none. Throws
+// sim::InputError when the file is not a readable HDF5 file.
+std::string ReadSceneYaml(const std::string& h5_path);
+
 }  // namespace render

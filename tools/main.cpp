@@ -246,8 +246,12 @@ int Main(int argc, char** argv) {
       return status;
     }
     if (*render_cmd) {
-      render::FrameSequence frames(render_frames.Options(
-          sim::RenderSpec{}, render_threads > 0 ? render_threads : AllCores()));
+      // Camera, colouring and size from the run's own scene (its `render:` block), then the
+      // command line.
+      const sim::RenderSpec spec =
+          sim::LoadRenderSpec(render::ReadSceneYaml(render_input), render_input + ":scene_yaml");
+      render::FrameSequence frames(
+          render_frames.Options(spec, render_threads > 0 ? render_threads : AllCores()));
       const int count = render::RenderSavedRun(render_input, &frames, render_quiet);
       std::fprintf(stderr, "scoopsim: %d frames in %s\n", count, render_frames.dir.c_str());
       render_frames.MaybeVideo();

@@ -39,6 +39,15 @@ int Scoopsim(const std::string& args, const std::string& stderr_file = "/dev/nul
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// Width and height of a PNG: big-endian 32-bit words at bytes 16 and 20 (the IHDR chunk).
+void PngSize(const fs::path& png, int* width, int* height) {
+  std::ifstream in(png, std::ios::binary);
+  unsigned char b[24] = {};
+  in.read(reinterpret_cast<char*>(b), sizeof(b));
+  *width = (b[16] << 24) | (b[17] << 16) | (b[18] << 8) | b[19];
+  *height = (b[20] << 24) | (b[21] << 16) | (b[22] << 8) | b[23];
+}
+
 int CountFrames(const fs::path& dir) {
   int n = 0;
   for (int k = 0;; ++k) {
@@ -158,10 +167,10 @@ TEST(FramesTest, SceneRenderBlock) {
 }
 
 // The CLI: `scoopsim run --frames` writes a frame at t0 and every --every seconds, and
-// `scoopsim render` writes one frame per snapshot of the run's file, replacing the frames an
-// earlier sequence left in the folder. 200 spheres, 0.003 s run at dt = 6.4e-6 s with a frame
-// every 1e-3 s: frames at 0, 1, 2, 3 ms (the last step ends at or just past 3 ms) = 4; snapshots
-// every 200 steps (1.3 ms) plus t0 = 3.
+// `scoopsim render` writes one frame per snapshot of the run's file, sized by the run's scene,
+// replacing the frames an earlier sequence left in the folder. 200 spheres, 0.003 s run at dt
+// = 6.4e-6 s with a frame every 1e-3 s: frames at 0, 1, 2, 3 ms (the last step ends at or just past
+// 3 ms) = 4; snapshots every 200 steps (1.3 ms) plus t0 = 3.
 TEST(FramesTest, CliRunAndRenderWriteFrames) {
   const fs::path scene = TempDir() / "cli.yaml";
   std::ofstream(scene) << "materials: " << kSourceDir << "/scenes/materials.yaml\n"
@@ -195,6 +204,14 @@ render: {camera: trench_side, size: [320, 180]}
                      log.string()),
             0);
   EXPECT_EQ(CountFrames(saved), 3);
+  // The size comes from the run's own scene (render.size), as for the live frames.
+  int width = 0, height = 0;
+  PngSize(saved / "frame_000000.png", &width, &height);
+  EXPECT_EQ(width, 320);
+  EXPECT_EQ(height, 180);
+  PngSize(live / "frame_000000.png", &width, &height);
+  EXPECT_EQ(width, 320);
+  EXPECT_EQ(height, 180);
   EXPECT_FALSE(fs::exists(saved / "frame_000007.png"));
   EXPECT_TRUE(fs::exists(saved / "notes.txt"));
   std::ifstream in(log);
