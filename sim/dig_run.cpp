@@ -147,7 +147,8 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
     view.gravity = scene.gravity;
     options.on_frame(view);
   };
-  const double frame_every = options.frame_every > 0 ? options.frame_every : dig.interval;
+  // Frames: every frame_every seconds, by default 20 a simulated second.
+  const double frame_every = options.frame_every > 0 ? options.frame_every : 0.05;
 
   for (int pass = 1; pass <= dig.passes && status == 0; ++pass) {
     // Where the pass goes: the level scoop's lowest point at pass * bite below the surface.

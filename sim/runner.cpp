@@ -155,6 +155,25 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   double next_record = system->time();
   int exit_status = 0;
   if (scene.output.snapshot_every > 0) out.WriteSnapshot(system->time(), system->particles());
+
+  // Frames (render/, `--frames`): options.on_frame at t0 and then every frame_every seconds
+  // (0 = output.interval). Called here on the main thread between steps, so no OpenMP region is
+  // active while it renders. Fill in pass/rho/force/meshes once the run has a scoop.
+  const double frame_every = options.frame_every > 0 ? options.frame_every : scene.output.interval;
+  double next_frame = system->time();
+  auto maybe_frame = [&] {
+    if (!options.on_frame || system->time() < next_frame - 1e-3 * scene.time_step) return;
+    WorldView view;
+    view.time = system->time();
+    view.particles = &system->particles();
+    view.box_min = scene.box_min;
+    view.box_max = scene.box_max;
+    view.gravity = scene.gravity;
+    options.on_frame(view);
+    while (next_frame <= system->time() + 1e-3 * scene.time_step) next_frame += frame_every;
+  };
+  maybe_frame();
+
   const int64_t step0 = system->step_count();
   while (system->time() < t_end - 0.5 * scene.time_step) {
     const dem::StepStatus status = system->Step();
@@ -170,6 +189,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
     }
     if (scene.output.snapshot_every > 0 && steps % scene.output.snapshot_every == 0)
       out.WriteSnapshot(system->time(), system->particles());
+    maybe_frame();
     if (steps % 64 == 0) {
       out.MaybeFlush();
       progress.Update(system->time() - t_start, steps * n);

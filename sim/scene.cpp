@@ -481,6 +481,63 @@ void ParseSleep(const std::string& file, const YAML::Node& node, dem::SleepConfi
       [](int64_t v) { return v >= 1 && v <= 250; }));
 }
 
+// The `render:` block of a scene (frames of `scoopsim run --frames`, `scoopsim render`).
+RenderSpec ParseRender(const std::string& path, const YAML::Node& node) {
+  const MapReader r(path, node, "render", {"camera", "color_by", "size", "every"});
+  RenderSpec spec;
+  std::string presets;
+  for (const char* name : kRenderCameraPresets)
+    presets += (presets.empty() ? "" : "|") + std::string(name);
+  if (r.Has("camera")) {
+    const YAML::Node camera = node["camera"];
+    const std::string expected =
+        "a preset (" + presets + ") or a map {position: [x, y, z], target: [x, y, z], fov: deg}";
+    if (camera.IsScalar()) {
+      bool known = false;
+      for (const char* name : kRenderCameraPresets) known = known || camera.Scalar() == name;
+      if (!known) Fail(path, LineOf(camera), "render.camera", expected, Describe(camera));
+      spec.camera_preset = camera.Scalar();
+    } else {
+      const MapReader c(path, camera, "render.camera", {"position", "target", "fov"});
+      spec.camera_preset.clear();
+      spec.camera_position = c.Vector("position", "a list of 3 numbers [x, y, z] (m)");
+      spec.camera_target = c.Vector("target", "a list of 3 numbers [x, y, z] (m)");
+      spec.fov_deg = c.Number("fov", spec.fov_deg, "a number in (0, 180) (deg)",
+                              [](double v) { return v > 0 && v < 180; });
+      if (dem::Norm(spec.camera_target - spec.camera_position) <= 0) {
+        Fail(path, LineOf(camera["target"]), "render.camera.target",
+             "a point other than render.camera.position", Describe(camera["target"]));
+      }
+    }
+  }
+  if (r.Has("color_by")) {
+    const YAML::Node f = node["color_by"];
+    const std::string expected = "one of speed, depth, material, force";
+    if (!f.IsScalar() || (f.Scalar() != "speed" && f.Scalar() != "depth" &&
+                          f.Scalar() != "material" && f.Scalar() != "force")) {
+      Fail(path, LineOf(f), "render.color_by", expected, Describe(f));
+    }
+    spec.color_by = f.Scalar();
+  }
+  if (r.Has("size")) {
+    const YAML::Node size = node["size"];
+    const std::string expected = "[width, height] in pixels, each an integer in [16, 4096]";
+    int wh[2] = {0, 0};
+    for (int i = 0; i < 2 && size.IsSequence() && size.size() == 2; ++i) {
+      long long v = 0;
+      if (size[i].IsScalar() && YAML::convert<long long>::decode(size[i], v) && v >= 16 &&
+          v <= 4096) {
+        wh[i] = static_cast<int>(v);
+      }
+    }
+    if (wh[0] == 0 || wh[1] == 0) Fail(path, LineOf(size), "render.size", expected, Describe(size));
+    spec.width = wh[0];
+    spec.height = wh[1];
+  }
+  spec.every = r.Number("every", spec.every, "a number >= 0 (s; 0 = output.interval)", NonNegative);
+  return spec;
+}
+
 }  // namespace
 
 void LoadMaterials(const std::string& path, dem::MaterialTable* table) {
@@ -497,7 +554,7 @@ Scene LoadScene(const std::string& path) {
   if (root.IsNull()) Fail(path, 1, "(top level)", "a map of scene keys", "an empty file");
   const MapReader top(path, root, "",
                       {"materials", "gravity", "time_step", "neighbor", "box", "bed", "duration",
-                       "output", "threads", "dig", "sleep", "notes"});
+                       "output", "threads", "dig", "sleep", "render", "notes"});
 
   // Materials file, relative to the scene's folder.
   const std::string materials_expected = "the path of a readable materials file";
@@ -667,11 +724,19 @@ Scene LoadScene(const std::string& path) {
 
   if (top.Has("dig")) ParseDig(path, root["dig"], bed_material, &scene);
   if (top.Has("sleep")) ParseSleep(path, root["sleep"], &scene.sleep);
+  // Frames (render/): camera, colouring, size, period.
+  if (top.Has("render")) scene.render = ParseRender(path, root["render"]);
 
   // Derived time step: a fraction of the Rayleigh time of the smallest sphere (paper eq. 4).
   scene.time_step = scene.rayleigh_fraction *
                     dem::RayleighTimeStep(spec.radius_min, scene.materials[bed_material]);
   return scene;
+}
+
+RenderSpec LoadRenderSpec(const std::string& yaml_text, const std::string& name) {
+  const YAML::Node root = Parse(name, yaml_text);
+  if (!root.IsMap() || !root["render"]) return RenderSpec{};
+  return ParseRender(name, root["render"]);
 }
 
 }  // namespace sim

@@ -71,6 +71,19 @@ struct DigSpec {
   bool surface_given = false;  // else measured from the settled bed
   double interval = 1e-3;      // time between rows of /scoop/ [s]
 };
+// Frames (key `render:`, optional): camera, colouring and size of the OSMesa frames written by
+// `scoopsim run --frames DIR`. Plain data: sim knows nothing of render/, which reads this.
+struct RenderSpec {
+  std::string camera_preset = "trench_oblique";  // one of kRenderCameraPresets; "" = explicit
+  dem::Vec3 camera_position, camera_target;      // explicit camera [m] (camera: {position, ...})
+  double fov_deg = 35;                           // vertical field of view [deg], in (0, 180)
+  std::string color_by = "speed";                // speed | depth | material | force
+  int width = 1280, height = 720;                // [px], each in [16, 4096]
+  double every = 0;                              // [s] between frames; 0 = output.interval
+};
+// Camera presets a scene may name (render/camera.cpp frames each; a render test checks both
+// lists agree).
+inline const char* const kRenderCameraPresets[] = {"trench_side", "trench_oblique", "top"};
 
 struct Scene {
   std::string path;       // the scene file as given
@@ -89,10 +102,15 @@ struct Scene {
   int threads = 0;  // 0 = all cores (CLI --threads overrides)
   DigSpec dig;
   dem::SleepConfig sleep;  // used while digging (never while settling)
+  RenderSpec render;
 };
 
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.
 Scene LoadScene(const std::string& path);
+
+// The `render:` block of a scene's text (for a saved run's stored scene); defaults when it has
+// none. `name` stands for the file in messages. Throws InputError like LoadScene.
+RenderSpec LoadRenderSpec(const std::string& yaml_text, const std::string& name);
 
 // Loads a materials file into `table` (materials and their pair interactions). Throws InputError.
 void LoadMaterials(const std::string& path, dem::MaterialTable* table);

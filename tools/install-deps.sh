@@ -7,6 +7,7 @@ PKGS=(
   libgtest-dev googletest
   python3 python3-numpy python3-h5py python3-matplotlib
   liggghts openmpi-bin time python3-yaml
+  libosmesa6-dev libgl-dev libpng-dev
 )
 missing=()
 for p in "${PKGS[@]}"; do

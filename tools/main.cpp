@@ -2,16 +2,26 @@
 //   scoopsim bed SCENE -o BED.h5            fill the scene's box, settle, save the bed
 //   scoopsim run SCENE -o OUT.h5            load (or make) the bed and run for scene.duration
 //   scoopsim bench settle --particles N --steps S
+//   scoopsim run SCENE --frames DIR [--every S] [--video]   PNG frames while running (render/)
+//   scoopsim render OUT.h5 --frames DIR [--video] [--color-by F] [--camera PRESET]
+//   scoopsim bench render --particles N --frames F [--threads T]
 // Exit status: 0 success, 1 runtime failure, 2 bad input (scene, materials file or command line);
 // the commands' own statuses pass through (sim/runner.cpp: 3 unstable, 4 not settled, 130 stopped).
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <memory>
 #include <string>
+#include <thread>
 
+#include "render/bench.h"
+#include "render/camera.h"
+#include "render/frames.h"
+#include "render/saved_run.h"
 #include "sim/runner.h"
 #include "sim/scene.h"
 
@@ -66,6 +76,68 @@ struct SceneCommand {
   }
 };
 
+// Frame options shared by `run --frames` and `render`.
+struct FramesArgs {
+  std::string dir;
+  double every = 0;
+  bool video = false;
+  std::string color_by;
+  std::string camera;
+
+  void AddTo(CLI::App* command, bool required, bool with_every) {
+    CLI::Option* frames = command->add_option("--frames", dir,
+                                              "Write numbered PNG frames (frame_000000.png, ...) "
+                                              "into this folder");
+    if (required) frames->required();
+    if (with_every) {
+      command
+          ->add_option("--every", every,
+                       "Simulated seconds between frames (default: the scene's render.every, "
+                       "else output.interval)")
+          ->check(CLI::PositiveNumber);
+    }
+    command->add_flag("--video", video, "Also assemble DIR.mp4 with ffmpeg (when installed)");
+    command->add_option("--color-by", color_by, "speed|depth|material|force (default: the scene's)")
+        ->check(CLI::IsMember({"speed", "depth", "material", "force"}));
+    std::string presets;
+    for (const std::string& p : render::CameraPresetNames())
+      presets += (presets.empty() ? "" : "|") + p;
+    command->add_option("--camera", camera, "Camera preset: " + presets + " (default: the scene's)")
+        ->check(CLI::IsMember(render::CameraPresetNames()));
+  }
+
+  // Options from the scene's render block with the command line's overrides.
+  render::FrameOptions Options(const sim::RenderSpec& spec, int threads) const {
+    sim::RenderSpec s = spec;
+    if (!color_by.empty()) s.color_by = color_by;
+    if (!camera.empty()) s.camera_preset = camera;
+    render::FrameOptions options = render::FrameOptionsFromSpec(s);
+    options.dir = dir;
+    options.threads = threads;
+    return options;
+  }
+
+  // --video: DIR.mp4 next to the folder (DIR/frames.mp4 for "." or ".."), at 25 frames/s;
+  // says why when there is none.
+  void MaybeVideo() const {
+    if (!video) return;
+    const std::filesystem::path folder = std::filesystem::path(dir).lexically_normal();
+    const std::string name = folder.filename().string();
+    const std::string mp4 = (name.empty() || name == "." || name == "..")
+                                ? (folder / "frames.mp4").string()
+                                : (folder.parent_path() / (name + ".mp4")).string();
+    std::string message;
+    render::AssembleVideo(dir, mp4, 25, &message);
+    std::fprintf(stderr, "scoopsim: %s\n", message.c_str());
+  }
+};
+
+// Logical cores, for LP_NUM_THREADS when the run uses all of them.
+int AllCores() {
+  const unsigned n = std::thread::hardware_concurrency();
+  return n > 0 ? static_cast<int>(n) : 1;
+}
+
 int Main(int argc, char** argv) {
   CLI::App app{"scoopsim: DEM simulation of a lander scoop digging granular terrain"};
   app.set_version_flag("--version", std::string("scoopsim ") + SCOOPSIM_VERSION);
@@ -79,6 +151,23 @@ int Main(int argc, char** argv) {
   CLI::App* run = app.add_subcommand(
       "run", "Run a scene for its duration (loads bed.file, or makes the bed first)");
   run_args.AddTo(run, "out/run.h5");
+  FramesArgs run_frames;
+  run_frames.AddTo(run, false, true);
+
+  FramesArgs render_frames;
+  std::string render_input;
+  bool render_quiet = false;
+  int render_threads = 0;
+  CLI::App* render_cmd = app.add_subcommand(
+      "render",
+      "Render the particle snapshots of a saved run (scoopsim run -o OUT.h5) as PNG frames");
+  render_cmd->add_option("OUT.h5", render_input, "A run's HDF5 file")->required();
+  render_frames.AddTo(render_cmd, true, false);
+  render_cmd
+      ->add_option("--threads", render_threads,
+                   "Rasteriser threads (LP_NUM_THREADS); 0 = all cores")
+      ->check(CLI::Range(0, kMaxThreads));
+  render_cmd->add_flag("-q,--quiet", render_quiet, "No progress output");
 
   CLI::App* bench = app.add_subcommand("bench", "Benchmarks");
   bench->require_subcommand(1);
@@ -96,6 +185,29 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, kMaxThreads));
   settle->add_flag("-q,--quiet", bench_quiet, "No progress output (the JSON line is kept)");
+  CLI::App* bench_render = bench->add_subcommand(
+      "render",
+      "Frames per second of the renderer at 1280x720, PNG writing included (one JSON line)");
+  render::BenchRenderOptions render_bench;
+  bench_render->add_option("--particles", render_bench.particles, "Number of spheres")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{100000000}));
+  bench_render->add_option("--frames", render_bench.frames, "Frames to time")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  bench_render
+      ->add_option("--threads", render_bench.threads,
+                   "Rasteriser threads (LP_NUM_THREADS); 0 = the environment's or all cores")
+      ->capture_default_str()
+      ->check(CLI::Range(0, kMaxThreads));
+  bench_render->add_option("--keep", render_bench.keep_dir,
+                           "Write the frames into this folder and keep them (default: a temporary "
+                           "folder, removed)");
+  bench_render->add_flag("!--no-cull", render_bench.cull_hidden,
+                         "Hand every particle to GL (no occlusion culling), to measure it");
+  bench_render->add_option("--png-level", render_bench.png_level, "zlib level of the PNGs")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 9));
 
   try {
     app.parse(argc, argv);
@@ -113,9 +225,40 @@ int Main(int argc, char** argv) {
     if (*run) {
       const sim::Scene scene = sim::LoadScene(run_args.scene);
       MakeParentDirectories(run_args.output);
-      return sim::RunScene(scene, run_args.Options(scene));
+      sim::RunOptions options = run_args.Options(scene);
+      std::unique_ptr<render::FrameSequence> frames;
+      if (!run_frames.dir.empty()) {
+        // Rendering happens inside the run loop's frame callback, between steps: the DEM's
+        // OpenMP threads are idle then, and llvmpipe gets as many threads as the DEM had.
+        frames = std::make_unique<render::FrameSequence>(
+            run_frames.Options(scene.render, options.threads > 0 ? options.threads : AllCores()));
+        options.on_frame = [&frames](const sim::WorldView& view) { frames->Add(view); };
+        options.frame_every = run_frames.every > 0 ? run_frames.every : scene.render.every;
+      }
+      const int status = sim::RunScene(scene, options);
+      if (frames) {
+        std::fprintf(stderr, "scoopsim: %d frames in %s (%.0f ms draw + %.0f ms PNG a frame)\n",
+                     frames->count(), run_frames.dir.c_str(),
+                     1e3 * frames->draw_seconds() / std::max(frames->count(), 1),
+                     1e3 * frames->png_seconds() / std::max(frames->count(), 1));
+        run_frames.MaybeVideo();
+      }
+      return status;
+    }
+    if (*render_cmd) {
+      // Camera, colouring and size from the run's own scene (its `render:` block), then the
+      // command line.
+      const sim::RenderSpec spec =
+          sim::LoadRenderSpec(render::ReadSceneYaml(render_input), render_input + ":scene_yaml");
+      render::FrameSequence frames(
+          render_frames.Options(spec, render_threads > 0 ? render_threads : AllCores()));
+      const int count = render::RenderSavedRun(render_input, &frames, render_quiet);
+      std::fprintf(stderr, "scoopsim: %d frames in %s\n", count, render_frames.dir.c_str());
+      render_frames.MaybeVideo();
+      return 0;
     }
     if (*settle) return sim::BenchSettle(bench_options);
+    if (*bench_render) return render::BenchRender(render_bench);
   } catch (const sim::InputError& e) {
     std::fprintf(stderr, "scoopsim: %s\n", OneLine(e.what()).c_str());
     return kExitInput;

@@ -1,0 +1,50 @@
+// What colours the particles: a per-particle field (speed, depth, material, contact force) mapped
+// through viridis (continuous fields) or a categorical palette (material). Public header.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sim/world_view.h"
+
+namespace render {
+
+enum class ColorField { kSpeed, kDepth, kMaterial, kForce };
+
+// "speed", "depth", "material", "force"; false when `name` is none of them.
+bool ParseColorField(const std::string& name, ColorField* field);
+const char* FieldName(ColorField field);
+const char* FieldUnit(ColorField field);  // "m/s", "m", "", "N"
+
+struct Rgb {
+  float r = 0, g = 0, b = 0;  // linear 0..1, written to 8-bit as round(255 c)
+};
+
+// Viridis (matplotlib's default map), piecewise linear through its values at t = k/8, k = 0..8.
+// t is clamped to [0, 1].
+Rgb Viridis(double t);
+// Categorical colour of material index m (cycles through 8 colours).
+Rgb MaterialColor(int material);
+
+// The field of every particle, in storage order (N):
+//   speed     |v| [m/s]
+//   depth     z_top - z [m], z_top the highest particle centre in the view (0 at the surface)
+//   material  the material index
+//   force     contact force |f - m g| [N] (f of the last step holds gravity; needs view.gravity)
+void ComputeField(const sim::WorldView& view, ColorField field, std::vector<float>* values);
+
+// A colour range that only grows over a sequence of frames, so colours keep their meaning from
+// frame to frame: [0, max] with max the largest 99th percentile of the field seen so far (at
+// least `floor`). Material ranges over the material indices seen.
+class AutoRange {
+ public:
+  void Update(ColorField field, const std::vector<float>& values);
+  double min() const { return min_; }
+  double max() const { return max_; }
+
+ private:
+  double min_ = 0, max_ = 0;
+};
+
+}  // namespace render

@@ -1,0 +1,60 @@
+// Numbered PNG frames of a run: DIR/frame_000000.png, frame_000001.png, ..., rendered from the
+// views a run hands its frame callback (`scoopsim run --frames`) or read back from a saved run
+// (`scoopsim render`), and optionally an MP4 made from them by ffmpeg. Public header.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "render/renderer.h"
+#include "sim/scene.h"
+#include "sim/world_view.h"
+
+namespace render {
+
+struct FrameOptions {
+  std::string dir;            // output folder (created)
+  RenderSettings settings;    // camera size, colouring, ...
+  std::string camera_preset;  // when not empty, frames the view's box with this preset
+  bool auto_range = true;     // colour range from AutoRange (grows over the sequence)
+  int png_level = 1;          // zlib level
+  int threads = 0;            // LP_NUM_THREADS when unset (0 = llvmpipe's default)
+};
+
+// Frame options from a scene's `render:` block (camera, colour field, size). Throws
+// sim::InputError for a colour field or preset this build does not know.
+FrameOptions FrameOptionsFromSpec(const sim::RenderSpec& spec);
+
+class FrameSequence {
+ public:
+  // Creates the folder (removing frame_NNNNNN.png files an earlier sequence left there) and the
+  // renderer.
+  explicit FrameSequence(FrameOptions options);
+  ~FrameSequence();
+
+  // Renders `view` and writes the next numbered frame. Call between DEM steps only.
+  void Add(const sim::WorldView& view);
+
+  int count() const { return count_; }
+  const std::string& dir() const { return options_.dir; }
+  std::string FramePath(int index) const;                // DIR/frame_NNNNNN.png
+  double draw_seconds() const { return draw_seconds_; }  // summed over the frames so far
+  double png_seconds() const { return png_seconds_; }
+  const Renderer& renderer() const { return *renderer_; }
+  const FrameOptions& options() const { return options_; }
+
+ private:
+  FrameOptions options_;
+  std::unique_ptr<Renderer> renderer_;
+  AutoRange range_;
+  std::vector<float> field_;
+  int count_ = 0;
+  double draw_seconds_ = 0, png_seconds_ = 0;
+};
+
+// Assembles DIR/frame_%06d.png into `mp4` with ffmpeg (H.264, yuv420p) at `fps`. Returns false
+// with *message saying why (ffmpeg not installed, or it failed); true with the output path.
+bool AssembleVideo(const std::string& dir, const std::string& mp4, double fps,
+                   std::string* message);
+
+}  // namespace render

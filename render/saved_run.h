@@ -1,0 +1,24 @@
+// Frames from a saved run (`scoopsim render OUT.h5 --frames DIR`): every particle snapshot of a
+// sim::H5Output file (layout in sim/h5_output.h) rendered in order. Public header.
+#pragma once
+
+#include <string>
+
+#include "render/frames.h"
+
+namespace render {
+
+// Renders each /snapshots/NNNNNN of `h5_path` into `frames`. The bed box comes from the scene
+// stored in the file (root attribute scene_yaml), else from the particles' extent. The caption
+// takes pass, rho and |force_world| from /scoop/{time,pass,rho,force_world} when the file has
+// them (the sample at or before the snapshot's time), else shows the time only. The scoop itself
+// is not drawn yet (see render/README.md). Returns the number of frames written. Throws
+// sim::InputError for a file that cannot be read as a run or for a field the snapshots lack
+// (force: snapshots store no forces).
+int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet);
+
+// The scene text stored in a saved run (root attribute scene_yaml); "" when it has none. Throws
+// sim::InputError when the file is not a readable HDF5 file.
+std::string ReadSceneYaml(const std::string& h5_path);
+
+}  // namespace render

@@ -1,0 +1,231 @@
+// Frame sequences: a small dig-like scene rendered at two times (not blank, and different), the
+// `render:` block of a scene, and the CLI end to end (`scoopsim run --frames`, `scoopsim render`).
+#include "render/frames.h"
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "render/bench.h"
+#include "sim/bed.h"
+#include "sim/scene.h"
+
+namespace render {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kSourceDir = SCOOPSIM_SOURCE_DIR;
+
+fs::path TempDir() {
+  static const fs::path dir = [] {
+    const fs::path p =
+        fs::temp_directory_path() / ("scoopsim_render_" + std::to_string(::getpid()));
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+  }();
+  return dir;
+}
+
+int Scoopsim(const std::string& args, const std::string& stderr_file = "/dev/null") {
+  const std::string cmd = std::string(SCOOPSIM_BINARY) + " " + args + " 2>" + stderr_file;
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// Width and height of a PNG: big-endian 32-bit words at bytes 16 and 20 (the IHDR chunk).
+void PngSize(const fs::path& png, int* width, int* height) {
+  std::ifstream in(png, std::ios::binary);
+  unsigned char b[24] = {};
+  in.read(reinterpret_cast<char*>(b), sizeof(b));
+  *width = (b[16] << 24) | (b[17] << 16) | (b[18] << 8) | b[19];
+  *height = (b[20] << 24) | (b[21] << 16) | (b[22] << 8) | b[23];
+}
+
+int CountFrames(const fs::path& dir) {
+  int n = 0;
+  for (int k = 0;; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%06d.png", k);
+    if (!fs::exists(dir / name)) return n;
+    ++n;
+  }
+}
+
+// (d) A small dig-like scene: scenes/settle_small.yaml's box and snow, 600 spheres poured and
+// settled briefly, a box-shaped "scoop" above the bed. Frame 0 at the start; then 300 steps
+// while the scoop moves 1 cm along x and 0.5 cm down; frame 1. Each frame is far from blank
+// (over 10% of the pixels differ from the background: the bed alone covers more) and the two
+// differ in over 500 pixels (the scoop alone moves by ~20 px across a ~60 px footprint).
+TEST(FramesTest, DigSceneIsNotBlankAndChanges) {
+  sim::Scene scene = sim::LoadScene(kSourceDir + "/scenes/settle_small.yaml");
+  scene.bed.count = 600;
+  scene.bed.settle_ke = 1.0;  // stop after the fall time (sim/bed.h)
+  dem::System system(scene.materials, sim::MakeSystemConfig(scene));
+  system.set_num_threads(1);
+  sim::FillAndSettle(scene, &system, nullptr);
+
+  FrameOptions options;
+  options.dir = (TempDir() / "dig").string();
+  options.settings.camera.width = 480;
+  options.settings.camera.height = 270;
+  options.camera_preset = "trench_oblique";
+  options.threads = 1;
+  FrameSequence frames(options);
+  const dem::TriangleMesh scoop = BoxMesh({-0.008, -0.01, -0.004}, {0.008, 0.01, 0.004});
+  sim::WorldView view;
+  view.particles = &system.particles();
+  view.box_min = scene.box_min;
+  view.box_max = scene.box_max;
+  view.gravity = scene.gravity;
+  view.meshes.push_back({&scoop, {{0.015, 0.025, 0.03}, {}}});
+  view.time = system.time();
+  frames.Add(view);
+  const Image first = frames.renderer().image();  // a copy: the renderer reuses its image
+  for (int k = 0; k < 300; ++k) ASSERT_TRUE(system.Step().ok());
+  view.time = system.time();
+  view.pass = 1;
+  view.rho = 0.01;
+  view.force = 2.5;
+  view.meshes[0].pose.position = {0.025, 0.025, 0.025};
+  frames.Add(view);
+  EXPECT_EQ(frames.count(), 2);
+  EXPECT_TRUE(fs::exists(frames.FramePath(0)));
+  EXPECT_TRUE(fs::exists(frames.FramePath(1)));
+
+  const Image& second = frames.renderer().image();
+  const Rgba8 background = frames.options().settings.background;
+  int not_background = 0, differing = 0;
+  for (int y = 0; y < second.height(); ++y) {
+    for (int x = 0; x < second.width(); ++x) {
+      not_background += second.At(x, y) != background;
+      differing += second.At(x, y) != first.At(x, y);
+    }
+  }
+  EXPECT_GT(not_background, second.width() * second.height() / 10);
+  EXPECT_GT(differing, 500);
+}
+
+// The `render:` block: a preset, an explicit camera, and bad values reported on one line with
+// file, line and key.
+TEST(FramesTest, SceneRenderBlock) {
+  const auto write = [](const std::string& name, const std::string& render_block) {
+    const fs::path path = TempDir() / name;
+    std::ofstream(path) << "materials: " << kSourceDir << "/scenes/materials.yaml\n"
+                        << "gravity: [0, 0, -1.3]\n"
+                        << "box: {min: [0, 0, 0], max: [0.03, 0.03, 0.06], wall_material: wall}\n"
+                        << "bed: {material: snow, radius: 1.75e-3, count: 100}\n"
+                        << render_block;
+    return path.string();
+  };
+  const sim::Scene preset = sim::LoadScene(write(
+      "preset.yaml", "render: {camera: top, color_by: depth, size: [320, 200], every: 0.01}\n"));
+  EXPECT_EQ(preset.render.camera_preset, "top");
+  EXPECT_EQ(preset.render.color_by, "depth");
+  EXPECT_EQ(preset.render.width, 320);
+  EXPECT_EQ(preset.render.height, 200);
+  EXPECT_EQ(preset.render.every, 0.01);
+  const FrameOptions options = FrameOptionsFromSpec(preset.render);
+  EXPECT_EQ(options.settings.color_by, ColorField::kDepth);
+  EXPECT_EQ(options.camera_preset, "top");
+
+  const sim::Scene explicit_camera = sim::LoadScene(write(
+      "explicit.yaml", "render:\n  camera: {position: [1, 2, 3], target: [0, 0, 0], fov: 50}\n"));
+  const FrameOptions e = FrameOptionsFromSpec(explicit_camera.render);
+  EXPECT_TRUE(e.camera_preset.empty());
+  EXPECT_EQ(e.settings.camera.position.y, 2);
+  EXPECT_EQ(e.settings.camera.fov_y_deg, 50);
+  EXPECT_EQ(e.settings.camera.width, 1280);  // default size
+
+  const struct {
+    const char* block;
+    const char* message;
+  } bad[] = {
+      {"render: {camera: sideways}\n", ":5: render.camera: expected a preset (trench_side|"},
+      {"render: {color_by: colour}\n", ":5: render.color_by: expected one of speed, depth"},
+      {"render: {size: [10, 720]}\n", ":5: render.size: expected [width, height] in pixels"},
+      {"render:\n  camera: {position: [1, 1, 1], target: [1, 1, 1]}\n",
+       ":6: render.camera.target: expected a point other than render.camera.position"},
+      {"render: {every: -1}\n", ":5: render.every: expected a number >= 0"},
+      {"render: {zoom: 2}\n", ":5: render.zoom: expected one of the keys camera, color_by"},
+  };
+  for (const auto& c : bad) {
+    try {
+      sim::LoadScene(write("bad.yaml", c.block));
+      ADD_FAILURE() << "accepted: " << c.block;
+    } catch (const sim::InputError& error) {
+      EXPECT_NE(std::string(error.what()).find(c.message), std::string::npos)
+          << error.what() << "\nexpected to contain: " << c.message;
+    }
+  }
+}
+
+// The CLI: `scoopsim run --frames` writes a frame at t0 and every --every seconds, and
+// `scoopsim render` writes one frame per snapshot of the run's file, sized by the run's scene,
+// replacing the frames an earlier sequence left in the folder. 200 spheres, 0.003 s run at dt
+// = 6.4e-6 s with a frame every 1e-3 s: frames at 0, 1, 2, 3 ms (the last step ends at or just past
+// 3 ms) = 4; snapshots every 200 steps (1.3 ms) plus t0 = 3.
+TEST(FramesTest, CliRunAndRenderWriteFrames) {
+  const fs::path scene = TempDir() / "cli.yaml";
+  std::ofstream(scene) << "materials: " << kSourceDir << "/scenes/materials.yaml\n"
+                       << R"(gravity: [0, 0, -1.3]
+time_step: {rayleigh_fraction: 0.2}
+box: {min: [0, 0, 0], max: [0.03, 0.03, 0.06], wall_material: wall}
+bed:
+  material: snow
+  radius: 1.75e-3
+  count: 200
+  settle: {kinetic_energy: 1.0, max_time: 1.0}
+duration: 0.003
+output: {interval: 1.0e-3, snapshot_every: 200}
+render: {camera: trench_side, size: [320, 180]}
+)";
+  const fs::path out = TempDir() / "cli.h5";
+  const fs::path live = TempDir() / "live";
+  ASSERT_EQ(Scoopsim("run " + scene.string() + " -o " + out.string() + " --threads 1 --quiet " +
+                     "--frames " + live.string() + " --every 1e-3"),
+            0);
+  EXPECT_EQ(CountFrames(live), 4);
+
+  // A frame left by an earlier, longer sequence goes; other files stay.
+  const fs::path saved = TempDir() / "saved";
+  fs::create_directories(saved);
+  std::ofstream(saved / "frame_000007.png") << "stale";
+  std::ofstream(saved / "notes.txt") << "keep";
+  const fs::path log = TempDir() / "render.log";
+  ASSERT_EQ(Scoopsim("render " + out.string() + " --frames " + saved.string() +
+                         " --threads 1 --quiet --color-by depth --camera top --video",
+                     log.string()),
+            0);
+  EXPECT_EQ(CountFrames(saved), 3);
+  // The size comes from the run's own scene (render.size), as for the live frames.
+  int width = 0, height = 0;
+  PngSize(saved / "frame_000000.png", &width, &height);
+  EXPECT_EQ(width, 320);
+  EXPECT_EQ(height, 180);
+  PngSize(live / "frame_000000.png", &width, &height);
+  EXPECT_EQ(width, 320);
+  EXPECT_EQ(height, 180);
+  EXPECT_FALSE(fs::exists(saved / "frame_000007.png"));
+  EXPECT_TRUE(fs::exists(saved / "notes.txt"));
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // --video either made the MP4 or said that ffmpeg is missing.
+  EXPECT_TRUE(text.find("ffmpeg is not installed") != std::string::npos ||
+              fs::exists(saved.string() + ".mp4"))
+      << text;
+
+  // Forces are not in snapshots: asking for them is bad input (status 2) with a message.
+  EXPECT_EQ(Scoopsim("render " + out.string() + " --frames " + (TempDir() / "f").string() +
+                     " --quiet --color-by force"),
+            2);
+}
+
+}  // namespace
+}  // namespace render
