@@ -1,4 +1,4 @@
-// Frame sequences: a small dig-like scene rendered at two times (not blank, and different), the
+// Frame sequences: the quick dig rendered at two times (not blank, and different), the
 // `render:` block of a scene, and the CLI end to end (`scoopsim run --frames`, `scoopsim render`).
 #include "render/frames.h"
 
@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -14,6 +15,8 @@
 
 #include "render/bench.h"
 #include "sim/bed.h"
+#include "sim/h5_output.h"
+#include "sim/runner.h"
 #include "sim/scene.h"
 
 namespace render {
@@ -58,19 +61,13 @@ int CountFrames(const fs::path& dir) {
   }
 }
 
-// (d) A small dig-like scene: scenes/settle_small.yaml's box and snow, 600 spheres poured and
-// settled briefly, a box-shaped "scoop" above the bed. Frame 0 at the start; then 300 steps
-// while the scoop moves 1 cm along x and 0.5 cm down; frame 1. Each frame is far from blank
-// (over 10% of the pixels differ from the background: the bed alone covers more) and the two
-// differ in over 500 pixels (the scoop alone moves by ~20 px across a ~60 px footprint).
-TEST(FramesTest, DigSceneIsNotBlankAndChanges) {
-  sim::Scene scene = sim::LoadScene(kSourceDir + "/scenes/settle_small.yaml");
-  scene.bed.count = 600;
-  scene.bed.settle_ke = 1.0;  // stop after the fall time (sim/bed.h)
-  dem::System system(scene.materials, sim::MakeSystemConfig(scene));
-  system.set_num_threads(1);
-  sim::FillAndSettle(scene, &system, nullptr);
-
+// (d) The quick dig itself (scenes/quick_dig.yaml: bed poured, the scoop on the Table 1 path),
+// rendered while it runs: the frame at entry (the first one, scoop above the bed) and the first
+// frame past 50 mm of rho (mid-trench). Each is far from blank (over 10% of the pixels differ from
+// the background: the bed alone covers more) and the two differ in over 2000 pixels (the scoop
+// has moved by a third of the box). Then the run is stopped the way SIGTERM stops it.
+TEST(FramesTest, QuickDigIsNotBlankAndChanges) {
+  sim::Scene scene = sim::LoadScene(kSourceDir + "/scenes/quick_dig.yaml");
   FrameOptions options;
   options.dir = (TempDir() / "dig").string();
   options.settings.camera.width = 480;
@@ -78,38 +75,41 @@ TEST(FramesTest, DigSceneIsNotBlankAndChanges) {
   options.camera_preset = "trench_oblique";
   options.threads = 1;
   FrameSequence frames(options);
-  const dem::TriangleMesh scoop = BoxMesh({-0.008, -0.01, -0.004}, {0.008, 0.01, 0.004});
-  sim::WorldView view;
-  view.particles = &system.particles();
-  view.box_min = scene.box_min;
-  view.box_max = scene.box_max;
-  view.gravity = scene.gravity;
-  view.meshes.push_back({&scoop, {{0.015, 0.025, 0.03}, {}}});
-  view.time = system.time();
-  frames.Add(view);
-  const Image first = frames.renderer().image();  // a copy: the renderer reuses its image
-  for (int k = 0; k < 300; ++k) ASSERT_TRUE(system.Step().ok());
-  view.time = system.time();
-  view.pass = 1;
-  view.rho = 0.01;
-  view.force = 2.5;
-  view.meshes[0].pose.position = {0.025, 0.025, 0.025};
-  frames.Add(view);
-  EXPECT_EQ(frames.count(), 2);
-  EXPECT_TRUE(fs::exists(frames.FramePath(0)));
-  EXPECT_TRUE(fs::exists(frames.FramePath(1)));
-
-  const Image& second = frames.renderer().image();
+  Image entry, mid;
+  bool have_entry = false, have_mid = false;
+  sim::RunOptions run;
+  run.output = (TempDir() / "quick_dig.h5").string();
+  run.quiet = true;
+  run.threads = 2;
+  run.frame_every = 0.05;
+  run.on_frame = [&](const sim::WorldView& view) {
+    if (have_mid) return;
+    frames.Add(view);
+    if (!have_entry) {
+      entry = frames.renderer().image();  // a copy: the renderer reuses its image
+      have_entry = true;
+    } else if (view.pass == 1 && view.rho > 0.05) {
+      mid = frames.renderer().image();
+      have_mid = true;
+      std::raise(SIGTERM);  // the run closes its output and returns 130
+    }
+  };
+  EXPECT_EQ(sim::RunScene(scene, run), 130);
+  sim::ClearStopRequest();
+  ASSERT_TRUE(have_entry);
+  ASSERT_TRUE(have_mid);
   const Rgba8 background = frames.options().settings.background;
-  int not_background = 0, differing = 0;
-  for (int y = 0; y < second.height(); ++y) {
-    for (int x = 0; x < second.width(); ++x) {
-      not_background += second.At(x, y) != background;
-      differing += second.At(x, y) != first.At(x, y);
+  int not_background_entry = 0, not_background_mid = 0, differing = 0;
+  for (int y = 0; y < mid.height(); ++y) {
+    for (int x = 0; x < mid.width(); ++x) {
+      not_background_entry += entry.At(x, y) != background;
+      not_background_mid += mid.At(x, y) != background;
+      differing += mid.At(x, y) != entry.At(x, y);
     }
   }
-  EXPECT_GT(not_background, second.width() * second.height() / 10);
-  EXPECT_GT(differing, 500);
+  EXPECT_GT(not_background_entry, mid.width() * mid.height() / 10);
+  EXPECT_GT(not_background_mid, mid.width() * mid.height() / 10);
+  EXPECT_GT(differing, 2000);
 }
 
 // The `render:` block: a preset, an explicit camera, and bad values reported on one line with
