@@ -5,8 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unistd.h>
+
 #include <cstdio>
 #include <vector>
+
+#include "sim/mesh_io.h"
 
 namespace render {
 namespace {
@@ -157,7 +161,7 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
   const bool has_box = SceneBox(StringAttribute(root.id, "scene_yaml"), &box_lo, &box_hi);
 
   // The scoop's series for the caption, when the run had a dig.
-  std::vector<double> scoop_time, scoop_pass, scoop_rho, scoop_force;
+  std::vector<double> scoop_time, scoop_pass, scoop_rho, scoop_force, scoop_pose;
   if (Exists(file.id, "/scoop/time")) {
     scoop_time = Read<double>(h5_path, file.id, "/scoop/time", H5T_NATIVE_DOUBLE);
     if (Exists(file.id, "/scoop/pass"))
@@ -166,10 +170,24 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
       scoop_rho = Read<double>(h5_path, file.id, "/scoop/rho", H5T_NATIVE_DOUBLE);
     if (Exists(file.id, "/scoop/force_world"))
       scoop_force = Read<double>(h5_path, file.id, "/scoop/force_world", H5T_NATIVE_DOUBLE);
+    if (Exists(file.id, "/scoop/pose"))
+      scoop_pose = Read<double>(h5_path, file.id, "/scoop/pose", H5T_NATIVE_DOUBLE);
+  }
+  // The scoop mesh the run used (root attribute scoop_mesh), drawn at /scoop/pose. A run moved
+  // since, or a mesh no longer there, draws no scoop and says so once.
+  dem::TriangleMesh scoop_mesh;
+  const std::string scoop_path = StringAttribute(root.id, "scoop_mesh");
+  if (!scoop_path.empty() && !scoop_pose.empty()) {
+    try {
+      scoop_mesh = sim::LoadMesh(scoop_path);
+    } catch (const sim::InputError& e) {
+      std::fprintf(stderr, "scoopsim render: no scoop in the frames: %s\n", e.what());
+    }
   }
 
   dem::Particles particles;
   int written = 0;
+  const bool tty = isatty(fileno(stderr)) != 0;
   for (const std::string& name : names) {
     const std::string base = "/snapshots/" + name;
     const Id snapshot{H5Gopen2(file.id, base.c_str(), H5P_DEFAULT), H5Gclose};
@@ -219,6 +237,10 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
         const size_t k = static_cast<size_t>(it - scoop_time.begin()) - 1;
         if (k < scoop_pass.size()) view.pass = static_cast<int>(std::lround(scoop_pass[k]));
         if (k < scoop_rho.size()) view.rho = scoop_rho[k];
+        if (!scoop_mesh.triangles.empty() && 7 * k + 6 < scoop_pose.size()) {
+          const double* q = &scoop_pose[7 * k];
+          view.meshes.push_back({&scoop_mesh, {{q[0], q[1], q[2]}, {q[3], q[4], q[5], q[6]}}});
+        }
         if (3 * k + 2 < scoop_force.size()) {
           view.force =
               dem::Norm({scoop_force[3 * k], scoop_force[3 * k + 1], scoop_force[3 * k + 2]});
@@ -227,12 +249,16 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
     }
     frames->Add(view);
     ++written;
-    if (!quiet) {
+    // A live line on a terminal; a line every 50 frames (and the last) otherwise.
+    if (!quiet && tty) {
       std::fprintf(stderr, "\rscoopsim render: frame %d/%zu (t = %.5f s)", written, names.size(),
                    time);
+    } else if (!quiet && (written % 50 == 0 || written == static_cast<int>(names.size()))) {
+      std::fprintf(stderr, "scoopsim render: frame %d/%zu (t = %.5f s)\n", written,
+                   names.size(), time);
     }
   }
-  if (!quiet) std::fprintf(stderr, "\n");
+  if (!quiet && tty) std::fprintf(stderr, "\n");
   return written;
 }
 
