@@ -2,7 +2,7 @@
 # The demo: installs the dependencies, builds scoopsim, and runs the quick dig
 # (scenes/quick_dig.yaml): a bed of 1700 coarse snow spheres is poured and settled, then the
 # simplified Phoenix scoop digs one pass on the paper's Table 1 trajectory. Writes the run
-# (HDF5 + XDMF sidecar for ParaView) and a plot of the wrench on the scoop against rho.
+# (HDF5 + XDMF sidecar for ParaView), rendered frames and a plot of the wrench against rho.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -15,7 +15,7 @@ cmake --build build -j"$(nproc)" --target scoopsim
 # run down tens of times.
 export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
 mkdir -p out
-build/scoopsim run scenes/quick_dig.yaml -o out/quick_dig.h5
+build/scoopsim run scenes/quick_dig.yaml -o out/quick_dig.h5 --frames out/quick_dig_frames
 /usr/bin/python3 tools/plot_wrench.py out/quick_dig.h5 -o out/quick_dig_wrench.png
 
 echo
@@ -24,3 +24,4 @@ echo "  out/quick_dig.h5           /scoop/ wrench (body, l_scoop and world frame
 echo "                             mass; /series/; particle snapshots; the scene and provenance (HDF5)"
 echo "  out/quick_dig.xdmf         open it in ParaView (XDMF3 reader) to play the particle snapshots"
 echo "  out/quick_dig_wrench.png   |F|, |T| and the six components against rho (tools/plot_wrench.py)"
+echo "  out/quick_dig_frames/      frame_NNNNNN.png, 20 frames a simulated second (OSMesa, 1280x720)"
