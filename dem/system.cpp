@@ -135,7 +135,7 @@ struct System::Impl {
   std::vector<int64_t> scratch_i64;
   std::vector<int32_t> scratch_i32;
   std::vector<Vec3> scratch_v;
-  std::vector<uint8_t> scratch_wake;
+  std::vector<uint8_t> scratch_wake, scratch_zone;
 
   // Per-slab reductions of the force pass (fixed slots, so results do not depend on threads).
   std::vector<double> slab_overlap;  // largest overlap / smaller diameter
@@ -1083,8 +1083,8 @@ int64_t System::awake_count() const {
 // Sleep/wake decisions. `awake` holds 0 for a sleeping particle and 1 + q for an awake one that
 // has been quiet (slower than sleep.speed, spinning slower than speed / r) for q checks in a row.
 // A sleeper wakes when touched by an awake particle faster than wake_speed, or, once any sleeper
-// has entered the inner zone of a mesh (its bounding box grown by wake_distance), with every
-// sleeper of the outer zone (grown by wake_distance + wake_margin). An awake particle quiet for
+// has entered the inner zone of a mesh (centre closer than wake_distance to its surface), with
+// every sleeper of the outer zone (closer than wake_distance + wake_margin). An awake particle quiet for
 // quiet_checks checks outside every outer zone sleeps with v = w = 0.
 void System::UpdateSleep() {
   Impl& m = *impl_;
@@ -1101,36 +1101,59 @@ void System::UpdateSleep() {
       if (!p_.awake[i] && p_.awake[j] && Norm2(p_.v[j]) > wake2) woken[i] = 1;
       if (!p_.awake[j] && p_.awake[i] && Norm2(p_.v[i]) > wake2) woken[j] = 1;
     }
-  // Zones around the meshes: inner (bounding box + wake_distance) and outer (+ wake_margin).
-  std::vector<Vec3> inner, outer;  // lo, hi of each mesh
+  // Zones around the meshes, by distance from a particle's centre to the mesh surface: inner
+  // (< wake_distance) and outer (< wake_distance + wake_margin). Triangles are tested only when
+  // their bounding box, grown by the outer distance, holds the centre.
+  const double d_in = sc.wake_distance, d_out = sc.wake_distance + sc.wake_margin;
+  std::vector<uint8_t>& zone = m.scratch_zone;  // 0 far, 1 outer, 2 inner (n)
+  zone.assign(n, 0);
   for (const Impl::MeshState& ms : m.meshes) {
+    const auto& tris = ms.mesh.triangles;
+    std::vector<Vec3> box(2 * tris.size());
     Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-    for (const Vec3& v : ms.world) {
-      lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
-      hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+    for (size_t e = 0; e < tris.size(); ++e) {
+      const Vec3 &a = ms.world[tris[e][0]], &b = ms.world[tris[e][1]], &c = ms.world[tris[e][2]];
+      box[2 * e] = Vec3{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}),
+                        std::min({a.z, b.z, c.z})} - Vec3{d_out, d_out, d_out};
+      box[2 * e + 1] = Vec3{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}),
+                            std::max({a.z, b.z, c.z})} + Vec3{d_out, d_out, d_out};
+      lo = {std::min(lo.x, box[2 * e].x), std::min(lo.y, box[2 * e].y),
+            std::min(lo.z, box[2 * e].z)};
+      hi = {std::max(hi.x, box[2 * e + 1].x), std::max(hi.y, box[2 * e + 1].y),
+            std::max(hi.z, box[2 * e + 1].z)};
     }
-    const double d = sc.wake_distance, e = sc.wake_distance + sc.wake_margin;
-    inner.push_back(lo - Vec3{d, d, d});
-    inner.push_back(hi + Vec3{d, d, d});
-    outer.push_back(lo - Vec3{e, e, e});
-    outer.push_back(hi + Vec3{e, e, e});
+#pragma omp parallel for schedule(static) num_threads(num_threads_)
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3 c = p_.x[i];
+      if (zone[i] == 2 || c.x < lo.x || c.x > hi.x || c.y < lo.y || c.y > hi.y || c.z < lo.z ||
+          c.z > hi.z)
+        continue;
+      double best2 = d_out * d_out;
+      for (size_t e = 0; e < tris.size(); ++e) {
+        const Vec3 &blo = box[2 * e], &bhi = box[2 * e + 1];
+        if (c.x < blo.x || c.x > bhi.x || c.y < blo.y || c.y > bhi.y || c.z < blo.z ||
+            c.z > bhi.z)
+          continue;
+        const ClosestPoint cp = ClosestPointOnTriangle(c, ms.world[tris[e][0]],
+                                                       ms.world[tris[e][1]], ms.world[tris[e][2]]);
+        best2 = std::min(best2, Norm2(c - cp.point));
+        if (best2 < d_in * d_in) break;
+      }
+      if (best2 < d_in * d_in) {
+        zone[i] = 2;
+      } else if (best2 < d_out * d_out) {
+        zone[i] = std::max<uint8_t>(zone[i], 1);
+      }
+    }
   }
-  auto in = [](const std::vector<Vec3>& zone, const Vec3& c) {
-    bool hit = false;
-    for (size_t z = 0; z < zone.size(); z += 2)
-      hit = hit || (c.x >= zone[z].x && c.x <= zone[z + 1].x && c.y >= zone[z].y &&
-                    c.y <= zone[z + 1].y && c.z >= zone[z].z && c.z <= zone[z + 1].z);
-    return hit;
-  };
   // Does a sleeper lie in an inner zone? Then every sleeper of the outer zones wakes.
   bool batch = false;
-  for (size_t i = 0; i < n && !batch; ++i) batch = !p_.awake[i] && in(inner, p_.x[i]);
+  for (size_t i = 0; i < n && !batch; ++i) batch = !p_.awake[i] && zone[i] == 2;
   const double quiet2 = sc.speed * sc.speed;
   bool woke = false;
   int64_t awake = 0;
   for (size_t i = 0; i < n; ++i) {
-    const Vec3 c = p_.x[i];
-    const bool near = in(outer, c);
+    const bool near = zone[i] != 0;
     uint8_t& a = p_.awake[i];
     if (a == 0) {
       if ((batch && near) || woken[i]) {

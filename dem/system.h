@@ -28,8 +28,8 @@ struct SleepConfig {
   bool enabled = false;
   double speed = 2e-3;          // a particle is quiet below this speed (and spin * radius) [m/s]
   double wake_speed = 5e-3;     // a sleeping particle touched by one faster than this wakes [m/s]
-  double wake_distance = 0.02;  // particles this close to a mesh's bounding box stay awake [m]
-  double wake_margin = 0.01;    // when a sleeper enters that zone, every sleeper within
+  double wake_distance = 0.01;  // particles whose centre is this close to a mesh stay awake [m]
+  double wake_margin = 0.005;   // when a sleeper enters that zone, every sleeper within
                                 // wake_distance + wake_margin wakes at once, so wake-ups (each a
                                 // neighbour-list rebuild) come once per wake_margin of travel [m]
   int check_every = 50;         // steps between sleep/wake checks

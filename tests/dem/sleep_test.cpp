@@ -68,8 +68,8 @@ TEST(SleepTest, RestingLayerSleepsAndImpactWakesOnlyWhatItTouches) {
   EXPECT_LE(moved, 5);  // the struck sphere and at most its four nearest neighbours
 }
 
-// A cube mesh lowered towards the sleeping layer wakes the spheres under it (within the zone of
-// wake_distance + wake_margin around its bounding box) and leaves the far ones asleep.
+// A cube mesh lowered towards the sleeping layer wakes the spheres under it (those within
+// wake_distance + wake_margin of its surface) and leaves the far ones asleep.
 TEST(SleepTest, ApproachingMeshWakesItsZone) {
   System s(test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05}), LayerConfig());
   s.set_num_threads(1);
@@ -93,11 +93,16 @@ TEST(SleepTest, ApproachingMeshWakesItsZone) {
   mm.pose.position.z = h + 2 * kRadius + 0.002;  // 2 mm above the spheres: in the inner zone
   s.SetMeshMotion(k, mm);
   test::StepOk(s, 20);
-  // Awake: the spheres whose centres lie within the outer zone (box +- (h + 10 mm)) in x, y.
+  // Awake: the spheres whose centres lie within the outer zone, 10 mm of the cube's surface:
+  // distance to an axis-aligned cube = |max(|p - c| - h, 0)| per axis (closed form).
   int64_t expected = 0;
   const Particles& p = s.particles();
-  for (size_t i = 0; i < p.size(); ++i)
-    if (std::abs(p.x[i].x - 0.03) <= h + 0.01 && std::abs(p.x[i].y - 0.03) <= h + 0.01) ++expected;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const Vec3 d = p.x[i] - mm.pose.position;
+    const Vec3 out{std::max(std::abs(d.x) - h, 0.0), std::max(std::abs(d.y) - h, 0.0),
+                   std::max(std::abs(d.z) - h, 0.0)};
+    if (Norm(out) < 0.01) ++expected;
+  }
   EXPECT_GT(expected, 0);
   EXPECT_EQ(s.awake_count(), expected);
 }
