@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "dem/triangle.h"
+
 namespace sim {
 
 BodyFrame StudyBodyFrame(double heading, const dem::Vec3& gravity) {
@@ -76,6 +78,26 @@ std::vector<int64_t> ParticlesInCavity(const dem::Particles& p, const dem::Pose&
   }
   std::sort(ids.begin(), ids.end());
   if (mass) *mass = m;
+  return ids;
+}
+
+std::vector<int64_t> ParticlesTouchingMesh(const dem::Particles& p, const dem::TriangleMesh& mesh,
+                                           const dem::Pose& pose) {
+  std::vector<dem::Vec3> world;
+  for (const dem::Vec3& v : mesh.vertices) world.push_back(dem::Apply(pose, v));
+  std::vector<int64_t> ids;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const double r = p.radius[i];
+    for (const auto& t : mesh.triangles) {
+      const dem::ClosestPoint cp =
+          dem::ClosestPointOnTriangle(p.x[i], world[t[0]], world[t[1]], world[t[2]]);
+      if (dem::Norm2(p.x[i] - cp.point) < r * r) {
+        ids.push_back(p.id[i]);
+        break;
+      }
+    }
+  }
+  std::sort(ids.begin(), ids.end());
   return ids;
 }
 

@@ -45,6 +45,11 @@ std::vector<int64_t> ParticlesInCavity(const dem::Particles& p, const dem::Pose&
                                        const dem::Vec3& cavity_min, const dem::Vec3& cavity_max,
                                        double* mass);
 
+// Persistent ids of the particles that overlap the mesh at `pose` (centre closer than its radius
+// to a triangle), sorted.
+std::vector<int64_t> ParticlesTouchingMesh(const dem::Particles& p, const dem::TriangleMesh& mesh,
+                                           const dem::Pose& pose);
+
 // Lowest point of the mesh along world z, relative to the pivot, when the scoop is level
 // (orientation `level`), with the pivot at `pivot_scoop` in the l_scoop frame [m] (negative).
 double LowestBelowPivot(const dem::TriangleMesh& mesh, const dem::Quat& level,

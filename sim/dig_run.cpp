@@ -163,10 +163,20 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
          {&spec.approach, &spec.rotation1, &spec.linear, &spec.rotation2})
       if (s->enabled) plan.offset = std::min(plan.offset, s->start);
     const dem::MeshMotion first = MotionAt(plan, plan.descent_time, heading, origin_shift);
-    const double clear = bed_top + 2 * r_max;
-    plan.lift = std::max(0.0, clear - LowestZ(*mesh_ptr, first.pose));
-    plan.descent_speed = approach_speed;
-    plan.descent_time = plan.lift / approach_speed;
+    if (dig.start_buried) {
+      // The tool is placed in the bed at its start pose (as the testbed's scoop was inserted by
+      // hand): the particles it would overlap are taken out first.
+      const std::vector<int64_t> cut = ParticlesTouchingMesh(system->particles(), *mesh_ptr,
+                                                             first.pose);
+      system->RemoveParticles(cut);
+      std::fprintf(stderr, "scoopsim: pass %d starts buried: %zu particles removed from the tool\n",
+                   pass, cut.size());
+    } else {
+      const double clear = bed_top + 2 * r_max;
+      plan.lift = std::max(0.0, clear - LowestZ(*mesh_ptr, first.pose));
+      plan.descent_speed = approach_speed;
+      plan.descent_time = plan.lift / approach_speed;
+    }
 
     const double t0 = system->time();
     const double duration = plan.Duration();

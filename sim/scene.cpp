@@ -350,7 +350,8 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
   DigSpec& dig = scene->dig;
   dig.enabled = true;
   const MapReader d(file, node, "dig",
-                    {"scoop", "trajectory", "passes", "bite_depth", "surface", "interval"});
+                    {"scoop", "trajectory", "passes", "bite_depth", "surface", "interval",
+                     "start_buried"});
   // Scoop.
   const YAML::Node scoop_node = d.Need("scoop", "a map with keys mesh, material");
   const MapReader sc(file, scoop_node, "dig.scoop",
@@ -452,6 +453,11 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
     }
   }
   dig.interval = d.Number("interval", dig.interval, "a number > 0 (s)", Positive);
+  if (d.Has("start_buried")) {
+    const YAML::Node b = node["start_buried"];
+    if (!b.IsScalar() || !YAML::convert<bool>::decode(b, dig.start_buried))
+      Fail(file, LineOf(b), "dig.start_buried", "true or false", Describe(b));
+  }
 }
 
 void ParseSleep(const std::string& file, const YAML::Node& node, dem::SleepConfig* sleep) {

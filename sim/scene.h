@@ -70,6 +70,8 @@ struct DigSpec {
   double surface = 0;         // world z of the original surface [m] (when surface_given)
   bool surface_given = false;  // else measured from the settled bed
   double interval = 1e-3;      // time between rows of /scoop/ [s]
+  bool start_buried = false;   // place the tool at its start pose in the bed (particles it
+                               // overlaps removed) instead of lowering it from clear of the bed
 };
 // Frames (key `render:`, optional): camera, colouring and size of the OSMesa frames written by
 // `scoopsim run --frames DIR`. Plain data: sim knows nothing of render/, which reads this.

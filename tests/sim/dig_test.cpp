@@ -108,6 +108,27 @@ TEST(DigTest, BedSurfaceOfLattice) {
   EXPECT_DOUBLE_EQ(BedSurface(p, {0, 0, 0}, {0.08, 0.04, 0.1}, 0.008), 0.05);
 }
 
+// A buried start removes exactly the particles closer to a triangle than their radius: one at
+// 0.9 r above a floor triangle goes, one at 1.1 r stays (distance to a plane, closed form).
+TEST(DigTest, ParticlesTouchingMeshByDistance) {
+  dem::TriangleMesh m;
+  m.vertices = {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}};
+  m.triangles = {{0, 1, 2}};
+  dem::Pose pose;
+  pose.position = {0, 0, 0.5};
+  dem::Particles p;
+  const double r = 0.01;
+  for (double h : {0.9 * r, 1.1 * r, -0.9 * r}) {
+    p.id.push_back(static_cast<int64_t>(p.id.size()));
+    p.x.push_back({0.1, 0.0, 0.5 + h});
+    p.radius.push_back(r);
+  }
+  const std::vector<int64_t> ids = ParticlesTouchingMesh(p, m, pose);
+  ASSERT_EQ(ids.size(), 2u);
+  EXPECT_EQ(ids[0], 0);
+  EXPECT_EQ(ids[1], 2);
+}
+
 // A particle at the cavity centre is held; one just outside the back plate is not.
 TEST(DigTest, CavityHoldsInsideOnly) {
   dem::Particles p;
@@ -183,10 +204,11 @@ const std::string kSource = SCOOPSIM_SOURCE_DIR;
 TEST(DigSceneTest, ShippedDigScenesLoad) {
   for (const char* file :
        {"quick_dig.yaml", "tiny_dig.yaml", "paper/lut_snow_b15.yaml", "paper/lut_ice_b3.yaml",
-        "paper/size_S3p25.yaml", "paper/bed_snow.yaml"}) {
+        "paper/size_S3p25.yaml", "paper/bed_snow.yaml", "testbed_sand.yaml", "sleep_check.yaml",
+        "paper/snow_b15_pass1.yaml"}) {
     SCOPED_TRACE(file);
     const Scene s = LoadScene(kSource + "/scenes/" + file);
-    if (std::string(file).find("bed_") != std::string::npos) {
+    if (std::string(file).rfind("paper/bed_", 0) == 0) {
       EXPECT_FALSE(s.dig.enabled);
       continue;
     }
