@@ -26,8 +26,10 @@ struct Plane {
 // `check_every` steps from the data alone, so runs stay deterministic.
 struct SleepConfig {
   bool enabled = false;
-  double speed = 2e-3;          // a particle is quiet below this speed (and spin * radius) [m/s]
-  double wake_speed = 5e-3;     // a sleeping particle touched by one faster than this wakes [m/s]
+  // Thresholds measured on scenes/sleep_check.yaml: a quiet speed of 2e-3 m/s raised the mean
+  // |F| of a dig by 6%, 5e-4 m/s by 0.9% (bench/sleep_accuracy.sh; ARCHITECTURE.md).
+  double speed = 5e-4;          // a particle is quiet below this speed (and spin * radius) [m/s]
+  double wake_speed = 1e-3;     // a sleeping particle touched by one faster than this wakes [m/s]
   double wake_distance = 0.01;  // particles whose centre is this close to a mesh stay awake [m]
   double wake_margin = 0.005;   // when a sleeper enters that zone, every sleeper within
                                 // wake_distance + wake_margin wakes at once, so wake-ups (each a
