@@ -19,6 +19,7 @@
 #include "sim/h5_output.h"
 #include "sim/runner.h"
 #include "sim/scene.h"
+#include "tests/cli_util.h"
 
 namespace render {
 namespace {
@@ -27,20 +28,12 @@ namespace fs = std::filesystem;
 const std::string kSourceDir = SCOOPSIM_SOURCE_DIR;
 
 fs::path TempDir() {
-  static const fs::path dir = [] {
-    const fs::path p =
-        fs::temp_directory_path() / ("scoopsim_render_" + std::to_string(::getpid()));
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-  }();
+  static const fs::path dir = scoopsim_test::ProcessTempDir("render");
   return dir;
 }
 
 int Scoopsim(const std::string& args, const std::string& stderr_file = "/dev/null") {
-  const std::string cmd = std::string(SCOOPSIM_BINARY) + " " + args + " 2>" + stderr_file;
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return scoopsim_test::RunScoopsim(args, stderr_file);
 }
 
 // Width and height of a PNG: big-endian 32-bit words at bytes 16 and 20 (the IHDR chunk).

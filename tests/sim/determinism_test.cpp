@@ -3,8 +3,6 @@
 // that made the bed itself.
 #include <gtest/gtest.h>
 #include <hdf5.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cstdint>
 #include <cstdlib>
@@ -12,19 +10,15 @@
 #include <fstream>
 #include <string>
 
+#include "tests/cli_util.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 const std::string kSourceDir = SCOOPSIM_SOURCE_DIR;
 
 fs::path TempDir() {
-  static const fs::path dir = [] {
-    const fs::path p =
-        fs::temp_directory_path() / ("scoopsim_determinism_" + std::to_string(::getpid()));
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-  }();
+  static const fs::path dir = scoopsim_test::ProcessTempDir("determinism");
   return dir;
 }
 
@@ -46,11 +40,7 @@ bed:
   return path.string();
 }
 
-int Scoopsim(const std::string& args) {
-  const std::string cmd = std::string(SCOOPSIM_BINARY) + " " + args + " --quiet 2>/dev/null";
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+int Scoopsim(const std::string& args) { return scoopsim_test::RunScoopsim(args + " --quiet"); }
 
 uint64_t StateHash(const std::string& h5) {
   const hid_t file = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
