@@ -3,6 +3,7 @@
 // of its zone; results do not depend on the thread count.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "tests/dem/test_util.h"
@@ -107,7 +108,8 @@ TEST(SleepTest, ApproachingMeshWakesItsZone) {
   EXPECT_EQ(s.awake_count(), expected);
 }
 
-// Determinism with sleeping: spheres rained onto a sleeping layer, 1 and 2 threads, same hash.
+// Determinism with sleeping and a moving mesh: spheres rained onto a sleeping layer while a cube
+// ploughs through it; 1 and 2 threads give the same hash.
 uint64_t RainHash(int threads) {
   System s(test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05}), LayerConfig());
   s.set_num_threads(threads);
@@ -115,13 +117,33 @@ uint64_t RainHash(int threads) {
   for (int k = 0; k < 30; ++k)
     s.AddParticle({0.012 + 0.0013 * k, 0.02 + 0.0009 * k, 0.01 + 0.004 * (k % 5)}, {0, 0, -0.3}, {},
                   kRadius, 0);
+  TriangleMesh cube;
+  cube.material = 1;
+  const double h = 0.003;
+  for (int k = 0; k < 8; ++k) cube.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
+  const int32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : f) {
+    cube.triangles.push_back({q[0], q[1], q[2]});
+    cube.triangles.push_back({q[0], q[2], q[3]});
+  }
+  const int mesh = s.AddMesh(cube);
+  int64_t touched = 0;
+  const double dt = s.config().time_step, u = 1.0;  // 1 cm in the run: through two columns
   for (int k = 0; k < 3000; ++k) {
+    MeshMotion mm;
+    mm.pose.position = {-0.002 + u * (k + 1) * dt, 0.03, kRadius + h * 0.5};
+    mm.pose.orientation = AxisAngle({0, 0, 1}, 0.3);
+    mm.velocity = {u, 0, 0};
+    s.SetMeshMotion(mesh, mm);
     const StepStatus st = s.Step();
     if (!st.ok()) {
       ADD_FAILURE() << st.message;
       break;
     }
+    touched = std::max(touched, s.mesh_wrench(mesh).contacts);
   }
+  EXPECT_GT(touched, 0);  // the cube did plough into the layer
   return s.StateHash();
 }
 
