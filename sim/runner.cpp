@@ -29,13 +29,6 @@ std::unique_ptr<dem::System> MakeSystem(const Scene& scene, int threads) {
   return system;
 }
 
-std::string ResolveBedPath(const Scene& scene) {
-  namespace fs = std::filesystem;
-  const fs::path p(scene.bed.file);
-  if (p.is_absolute()) return p.string();
-  return (fs::path(scene.path).parent_path() / p).string();
-}
-
 void ReportUnstable(const dem::StepStatus& status) {
   std::fprintf(stderr, "scoopsim: simulation unstable: %s\n", status.message.c_str());
 }
@@ -115,7 +108,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   InstallStopHandlers();
   auto system = MakeSystem(scene, options.threads);
   if (!scene.bed.file.empty()) {
-    LoadBed(ResolveBedPath(scene), system.get());
+    LoadBed(scene.bed.file, system.get());  // already resolved against the scene's folder
     system->Canonicalize();
   } else {
     SettleReport r;

@@ -66,12 +66,14 @@ TEST(RunDeterminismTest, RunStateHashIndependentOfThreadsAndRepeatable) {
 
 // `scoopsim bed` then `run` from the saved bed replays the run that poured its own bed, bit for
 // bit: the bed file keeps positions, velocities, last forces and contact history, and both
-// runs rebuild their neighbour lists at the same state.
+// runs rebuild their neighbour lists at the same state. The scene names the bed by a path
+// relative to its own folder.
 TEST(RunDeterminismTest, RunFromSavedBedEqualsRunThatPouredIt) {
   const std::string pour = WriteScene("pour_b.yaml", "");
   const std::string bed = (TempDir() / "bed.h5").string();
   ASSERT_EQ(Scoopsim("bed " + pour + " -o " + bed + " --threads 2"), 0);
-  const std::string from_bed = WriteScene("from_bed.yaml", bed);
+  // Named relative to the scene's folder, as scenes/paper/*.yaml name their beds.
+  const std::string from_bed = WriteScene("from_bed.yaml", "bed.h5");
   const std::string out = (TempDir() / "r").string();
   ASSERT_EQ(Scoopsim("run " + pour + " -o " + out + "1.h5 --threads 2"), 0);
   ASSERT_EQ(Scoopsim("run " + from_bed + " -o " + out + "2.h5 --threads 1"), 0);
