@@ -1191,6 +1191,7 @@ void System::RefreshActive() {
   for (size_t i = 0; i < p_.size(); ++i)
     if (p_.awake[i]) m.active.push_back(static_cast<int32_t>(i));
   m.active_valid = true;
+  m.awake = static_cast<int64_t>(m.active.size());
 }
 
 void System::Diagnose(StepStatus* status) const {
