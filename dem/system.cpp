@@ -107,18 +107,18 @@ struct System::Impl {
     std::vector<MeshHistory> history;  // sorted by particle storage index
     // Per-group results of the parallel pass, summed serially in group order.
     std::vector<Vec3> group_force, group_torque, group_mesh_torque;
-    std::vector<double> group_overlap;  // deepest overlap / diameter of each group
+    std::vector<double> group_overlap;              // deepest overlap / diameter of each group
     std::vector<int32_t> group_history, group_new;  // history range start; new contacts count
     std::vector<MeshHistory> fresh;                 // new history, up to 4 slots per group
     MeshWrench wrench;
   };
   std::vector<MeshState> meshes;
   int64_t mesh_contacts = 0;
-  double mesh_worst = 0;         // deepest particle-mesh overlap / diameter at the last step
-  int64_t mesh_worst_id = -1;    // its particle
-  int mesh_worst_mesh = -1;      // and mesh
+  double mesh_worst = 0;       // deepest particle-mesh overlap / diameter at the last step
+  int64_t mesh_worst_id = -1;  // its particle
+  int mesh_worst_mesh = -1;    // and mesh
   int64_t awake = 0;
-  int64_t sleep_counter = 0;  // steps since the last sleep check
+  int64_t sleep_counter = 0;    // steps since the last sleep check
   std::vector<int32_t> active;  // storage indices of the awake particles (sleep enabled)
   // With sleeping: the particles that own list pairs or wall candidates (the force pass skips
   // the rest), in storage order, and where each slab's run of them starts (slabs + 1).
@@ -369,10 +369,9 @@ void System::Rebuild() {
       ms.history[kept++] = h;
     }
     ms.history.resize(kept);
-    std::stable_sort(ms.history.begin(), ms.history.end(),
-                     [](const Impl::MeshHistory& l, const Impl::MeshHistory& r) {
-                       return l.index < r.index;
-                     });
+    std::stable_sort(
+        ms.history.begin(), ms.history.end(),
+        [](const Impl::MeshHistory& l, const Impl::MeshHistory& r) { return l.index < r.index; });
     ms.candidates_valid = false;
   }
 
@@ -736,7 +735,8 @@ StepStatus System::Step() {
   const bool sleeping = config_.sleep.enabled;
   if (sleeping && !m.active_valid) RefreshActive();
   const int32_t* active = m.active.data();
-  const int64_t n_moving = sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
+  const int64_t n_moving =
+      sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : max_v2)
   for (int64_t a = 0; a < n_moving; ++a) {
     const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
@@ -778,7 +778,8 @@ StepStatus System::Step() {
   inv_inertia = p_.inv_inertia.data();
   if (sleeping && !m.active_valid) RefreshActive();
   active = m.active.data();
-  const int64_t n_kicked = sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
+  const int64_t n_kicked =
+      sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
   max_v2 = 0;
   int bad = 0;
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max       \
@@ -855,10 +856,8 @@ void System::BuildMeshCandidates(int k) {
   Vec3 mlo{1e300, 1e300, 1e300}, mhi{-1e300, -1e300, -1e300};
   for (size_t e = 0; e < nt; ++e) {
     const Vec3 &a = ms.world[tris[e][0]], &b = ms.world[tris[e][1]], &c = ms.world[tris[e][2]];
-    const Vec3 tlo{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}),
-                   std::min({a.z, b.z, c.z})};
-    const Vec3 thi{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}),
-                   std::max({a.z, b.z, c.z})};
+    const Vec3 tlo{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
+    const Vec3 thi{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
     lo[2 * e] = tlo;
     lo[2 * e + 1] = thi;
     mlo = {std::min(mlo.x, tlo.x), std::min(mlo.y, tlo.y), std::min(mlo.z, tlo.z)};
@@ -870,8 +869,8 @@ void System::BuildMeshCandidates(int k) {
   for (size_t i = 0; i < n; ++i) {
     const Vec3 c = p_.x[i];
     const double reach = p_.radius[i] + m.skin;
-    if (c.x < mlo.x - reach || c.x > mhi.x + reach || c.y < mlo.y - reach ||
-        c.y > mhi.y + reach || c.z < mlo.z - reach || c.z > mhi.z + reach)
+    if (c.x < mlo.x - reach || c.x > mhi.x + reach || c.y < mlo.y - reach || c.y > mhi.y + reach ||
+        c.z < mlo.z - reach || c.z > mhi.z + reach)
       continue;
     const size_t first = ms.cand_tri.size();
     for (size_t e = 0; e < nt; ++e) {
@@ -879,8 +878,8 @@ void System::BuildMeshCandidates(int k) {
       if (c.x < tlo.x - reach || c.x > thi.x + reach || c.y < tlo.y - reach ||
           c.y > thi.y + reach || c.z < tlo.z - reach || c.z > thi.z + reach)
         continue;
-      const ClosestPoint cp = ClosestPointOnTriangle(c, ms.world[tris[e][0]],
-                                                     ms.world[tris[e][1]], ms.world[tris[e][2]]);
+      const ClosestPoint cp = ClosestPointOnTriangle(c, ms.world[tris[e][0]], ms.world[tris[e][1]],
+                                                     ms.world[tris[e][2]]);
       if (Norm2(c - cp.point) < reach * reach) ms.cand_tri.push_back(static_cast<int32_t>(e));
     }
     if (ms.cand_tri.size() > first) {
@@ -1084,8 +1083,8 @@ int64_t System::awake_count() const {
 // has been quiet (slower than sleep.speed, spinning slower than speed / r) for q checks in a row.
 // A sleeper wakes when touched by an awake particle faster than wake_speed, or, once any sleeper
 // has entered the inner zone of a mesh (centre closer than wake_distance to its surface), with
-// every sleeper of the outer zone (closer than wake_distance + wake_margin). An awake particle quiet for
-// quiet_checks checks outside every outer zone sleeps with v = w = 0.
+// every sleeper of the outer zone (closer than wake_distance + wake_margin). An awake particle
+// quiet for quiet_checks checks outside every outer zone sleeps with v = w = 0.
 void System::UpdateSleep() {
   Impl& m = *impl_;
   const SleepConfig& sc = config_.sleep;
@@ -1113,10 +1112,12 @@ void System::UpdateSleep() {
     Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
     for (size_t e = 0; e < tris.size(); ++e) {
       const Vec3 &a = ms.world[tris[e][0]], &b = ms.world[tris[e][1]], &c = ms.world[tris[e][2]];
-      box[2 * e] = Vec3{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}),
-                        std::min({a.z, b.z, c.z})} - Vec3{d_out, d_out, d_out};
-      box[2 * e + 1] = Vec3{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}),
-                            std::max({a.z, b.z, c.z})} + Vec3{d_out, d_out, d_out};
+      box[2 * e] =
+          Vec3{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})} -
+          Vec3{d_out, d_out, d_out};
+      box[2 * e + 1] =
+          Vec3{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})} +
+          Vec3{d_out, d_out, d_out};
       lo = {std::min(lo.x, box[2 * e].x), std::min(lo.y, box[2 * e].y),
             std::min(lo.z, box[2 * e].z)};
       hi = {std::max(hi.x, box[2 * e + 1].x), std::max(hi.y, box[2 * e + 1].y),
@@ -1131,8 +1132,7 @@ void System::UpdateSleep() {
       double best2 = d_out * d_out;
       for (size_t e = 0; e < tris.size(); ++e) {
         const Vec3 &blo = box[2 * e], &bhi = box[2 * e + 1];
-        if (c.x < blo.x || c.x > bhi.x || c.y < blo.y || c.y > bhi.y || c.z < blo.z ||
-            c.z > bhi.z)
+        if (c.x < blo.x || c.x > bhi.x || c.y < blo.y || c.y > bhi.y || c.z < blo.z || c.z > bhi.z)
           continue;
         const ClosestPoint cp = ClosestPointOnTriangle(c, ms.world[tris[e][0]],
                                                        ms.world[tris[e][1]], ms.world[tris[e][2]]);
@@ -1258,9 +1258,8 @@ void System::Diagnose(StepStatus* status) const {
                 "its path, or lower its speed)";
     }
     status->particle = id;
-    msg << "particle " << id << " overlaps by " << 100.0 * worst
-        << "% of its diameter" << against << " at t = " << time_ << " s (limit "
-        << 100.0 * config_.max_overlap_fraction
+    msg << "particle " << id << " overlaps by " << 100.0 * worst << "% of its diameter" << against
+        << " at t = " << time_ << " s (limit " << 100.0 * config_.max_overlap_fraction
         << "%); lower time_step.rayleigh_fraction or raise the shear modulus";
   }
   status->message = msg.str();

@@ -20,9 +20,9 @@ struct Plane {
   int material = 0;
 };
 
-// Sleeping: particles at rest far from every mesh are frozen (not integrated; no contact between two
-// sleeping particles is computed, though a sleeping particle still pushes on awake ones) and wake
-// when a mesh comes near or a moving particle touches them. Decisions are taken every
+// Sleeping: particles at rest far from every mesh are frozen (not integrated; no contact between
+// two sleeping particles is computed, though a sleeping particle still pushes on awake ones) and
+// wake when a mesh comes near or a moving particle touches them. Decisions are taken every
 // `check_every` steps from the data alone, so runs stay deterministic.
 struct SleepConfig {
   bool enabled = false;
@@ -177,10 +177,10 @@ class System {
   void Rebuild();        // reorder storage by cell, rebuild the lists, carry the history over
   void ComputeForces();  // contacts into p_.f, p_.t (which hold gravity already)
   void Diagnose(StepStatus* status) const;
-  void MeshForces();        // particle-mesh contacts into p_.f, p_.t and the mesh wrenches
+  void MeshForces();  // particle-mesh contacts into p_.f, p_.t and the mesh wrenches
   void BuildMeshCandidates(int k);
-  void UpdateSleep();       // sleep/wake decisions every sleep.check_every steps
-  void RefreshActive();     // list the awake particles
+  void UpdateSleep();    // sleep/wake decisions every sleep.check_every steps
+  void RefreshActive();  // list the awake particles
   struct ContactBatch;
   void PairForces(ContactBatch& batch, size_t n);  // forces of a batch of touching pairs
 

@@ -1,5 +1,6 @@
 // Rigid transforms for the DEM: a unit quaternion (Hamilton convention, w first) and a pose.
-// A pose maps body coordinates to world coordinates: x_world = position + Rotate(orientation, x_body).
+// A pose maps body coordinates to world coordinates: x_world = position + Rotate(orientation,
+// x_body).
 #pragma once
 
 #include <cmath>
@@ -13,10 +14,9 @@ struct Quat {
 };
 
 inline Quat operator*(const Quat& a, const Quat& b) {
-  return {a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
-          a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-          a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
-          a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
+  return {
+      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
 }
 inline Quat Conjugate(const Quat& q) { return {q.w, -q.x, -q.y, -q.z}; }
 inline Quat Normalized(const Quat& q) {

@@ -7,7 +7,15 @@
 
 namespace dem {
 
-enum class TriangleRegion : int { kFace = 0, kEdgeAB, kEdgeBC, kEdgeCA, kVertexA, kVertexB, kVertexC };
+enum class TriangleRegion : int {
+  kFace = 0,
+  kEdgeAB,
+  kEdgeBC,
+  kEdgeCA,
+  kVertexA,
+  kVertexB,
+  kVertexC
+};
 
 struct ClosestPoint {
   Vec3 point;  // closest point of the triangle [m]

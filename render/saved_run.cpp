@@ -1,12 +1,11 @@
 #include "render/saved_run.h"
 
 #include <hdf5.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
-#include <unistd.h>
-
 #include <cstdio>
 #include <vector>
 
@@ -254,8 +253,8 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
       std::fprintf(stderr, "\rscoopsim render: frame %d/%zu (t = %.5f s)", written, names.size(),
                    time);
     } else if (!quiet && (written % 50 == 0 || written == static_cast<int>(names.size()))) {
-      std::fprintf(stderr, "scoopsim render: frame %d/%zu (t = %.5f s)\n", written,
-                   names.size(), time);
+      std::fprintf(stderr, "scoopsim render: frame %d/%zu (t = %.5f s)\n", written, names.size(),
+                   time);
     }
   }
   if (!quiet && tty) std::fprintf(stderr, "\n");

@@ -70,8 +70,8 @@ std::vector<int64_t> ParticlesInCavity(const dem::Particles& p, const dem::Pose&
   double m = 0;
   for (size_t i = 0; i < p.size(); ++i) {
     const dem::Vec3 b = dem::ApplyInverse(pose, p.x[i]);
-    if (b.x >= cavity_min.x && b.x <= cavity_max.x && b.y >= cavity_min.y &&
-        b.y <= cavity_max.y && b.z >= cavity_min.z && b.z <= cavity_max.z) {
+    if (b.x >= cavity_min.x && b.x <= cavity_max.x && b.y >= cavity_min.y && b.y <= cavity_max.y &&
+        b.z >= cavity_min.z && b.z <= cavity_max.z) {
       ids.push_back(p.id[i]);
       m += p.mass[i];
     }

@@ -31,7 +31,7 @@ struct PassPlan {
   double offset = 0;        // trajectory time at which the pass starts: its first segment [s]
   double descent_time = 0;  // [s]
   double descent_speed = 0;
-  double lift = 0;          // height of the start pose above the trajectory's t = 0 pose [m]
+  double lift = 0;  // height of the start pose above the trajectory's t = 0 pose [m]
   double Duration() const { return descent_time + trajectory.end_time() - offset; }
 };
 
@@ -49,8 +49,7 @@ dem::MeshMotion MotionAt(const PassPlan& plan, double tau, const dem::Quat& head
   }
   // Heading: rotate the whole trajectory about the vertical through origin_shift.
   dem::MeshMotion m;
-  m.pose.position =
-      origin_shift + dem::Rotate(heading, k.pose.position - origin_shift) + extra;
+  m.pose.position = origin_shift + dem::Rotate(heading, k.pose.position - origin_shift) + extra;
   m.pose.orientation = heading * k.pose.orientation;
   m.velocity = dem::Rotate(heading, k.velocity);
   m.angular_velocity = dem::Rotate(heading, k.angular_velocity);
@@ -99,8 +98,8 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
   double bed_top = surface;
   if (!dig.surface_given) {
     const dem::Vec3 margin{4 * r_max, 4 * r_max, 0};
-    surface = BedSurface(system->particles(), scene.box_min + margin, scene.box_max - margin,
-                         4 * r_max);
+    surface =
+        BedSurface(system->particles(), scene.box_min + margin, scene.box_max - margin, 4 * r_max);
   }
   for (size_t i = 0; i < system->particles().size(); ++i)
     bed_top = std::max(bed_top, system->particles().x[i].z + system->particles().radius[i]);
@@ -166,8 +165,8 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
     if (dig.start_buried) {
       // The tool is placed in the bed at its start pose (as the testbed's scoop was inserted by
       // hand): the particles it would overlap are taken out first.
-      const std::vector<int64_t> cut = ParticlesTouchingMesh(system->particles(), *mesh_ptr,
-                                                             first.pose);
+      const std::vector<int64_t> cut =
+          ParticlesTouchingMesh(system->particles(), *mesh_ptr, first.pose);
       system->RemoveParticles(cut);
       std::fprintf(stderr, "scoopsim: pass %d starts buried: %zu particles removed from the tool\n",
                    pass, cut.size());
@@ -265,16 +264,16 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
     if (status != 0) break;
     // Empty the scoop: the particles in its cavity are the sample of this pass.
     double mass = 0;
-    const std::vector<int64_t> held = ParticlesInCavity(
-        system->particles(), system->mesh_motion(k).pose, dig.scoop.cavity_min,
-        dig.scoop.cavity_max, &mass);
+    const std::vector<int64_t> held =
+        ParticlesInCavity(system->particles(), system->mesh_motion(k).pose, dig.scoop.cavity_min,
+                          dig.scoop.cavity_max, &mass);
     system->RemoveParticles(held);
     out->AppendRow("/scoop/collected_mass", &mass, 1);
     summary.collected_mass.push_back(mass);
     const double count = static_cast<double>(held.size());
     out->AppendRow("/scoop/collected_count", &count, 1);
-    std::fprintf(stderr, "scoopsim: pass %d: rho %.1f mm, collected %zu particles, %.4g kg\n",
-                 pass, 1e3 * rho, held.size(), mass);
+    std::fprintf(stderr, "scoopsim: pass %d: rho %.1f mm, collected %zu particles, %.4g kg\n", pass,
+                 1e3 * rho, held.size(), mass);
   }
   progress.Finish(system->time() - t_start, particle_steps);
   summary.mean_force = force_rows > 0 ? force_sum / force_rows : 0.0;

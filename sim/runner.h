@@ -14,13 +14,13 @@ namespace sim {
 // What a dig run measured, for callers that want numbers rather than the HDF5 file (tests,
 // studies). Magnitudes of the wrench in the world frame about the scoop CoM, over all rows.
 struct DigSummary {
-  double peak_force = 0;              // max |F| [N]
-  double mean_force = 0;              // mean |F| over the rows after first contact [N]
-  double peak_torque = 0;             // max |T| [N m]
+  double peak_force = 0;               // max |F| [N]
+  double mean_force = 0;               // mean |F| over the rows after first contact [N]
+  double peak_torque = 0;              // max |T| [N m]
   std::vector<double> collected_mass;  // per pass [kg]
-  int64_t particles = 0;              // at the start of the dig
+  int64_t particles = 0;               // at the start of the dig
   int64_t steps = 0;
-  double simulated = 0;               // [s]
+  double simulated = 0;  // [s]
 };
 
 struct RunOptions {
@@ -30,7 +30,7 @@ struct RunOptions {
   // Frames: when set, RunScene calls on_frame at t0 and then every frame_every simulated seconds
   // (0 = at every output interval), from the main thread, with no OpenMP region active.
   FrameCallback on_frame;
-  double frame_every = 0;  // [s]
+  double frame_every = 0;             // [s]
   DigSummary* dig_summary = nullptr;  // filled by a dig run when set
 };
 

@@ -349,9 +349,9 @@ void ParseSegment(const std::string& file, const MapReader& parent, const char* 
 void ParseDig(const std::string& file, const YAML::Node& node, int bed_material, Scene* scene) {
   DigSpec& dig = scene->dig;
   dig.enabled = true;
-  const MapReader d(file, node, "dig",
-                    {"scoop", "trajectory", "passes", "bite_depth", "surface", "interval",
-                     "start_buried"});
+  const MapReader d(
+      file, node, "dig",
+      {"scoop", "trajectory", "passes", "bite_depth", "surface", "interval", "start_buried"});
   // Scoop.
   const YAML::Node scoop_node = d.Need("scoop", "a map with keys mesh, material");
   const MapReader sc(file, scoop_node, "dig.scoop",
@@ -411,12 +411,16 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
   {
     const std::string expected = "a list of 2 numbers [x, y]: pivot position at t = 0 (m)";
     const YAML::Node st = tr.Need("start", expected);
-    if (!st.IsSequence() || st.size() != 2) Fail(file, LineOf(st), "dig.trajectory.start", expected, Describe(st));
-    t.pivot_start.x = tr.CheckNumber(st[0], "dig.trajectory.start", expected, [](double) { return true; }, &st);
-    t.pivot_start.y = tr.CheckNumber(st[1], "dig.trajectory.start", expected, [](double) { return true; }, &st);
+    if (!st.IsSequence() || st.size() != 2)
+      Fail(file, LineOf(st), "dig.trajectory.start", expected, Describe(st));
+    t.pivot_start.x = tr.CheckNumber(
+        st[0], "dig.trajectory.start", expected, [](double) { return true; }, &st);
+    t.pivot_start.y = tr.CheckNumber(
+        st[1], "dig.trajectory.start", expected, [](double) { return true; }, &st);
   }
   dig.heading = tr.Number("heading", 0.0, "a number (deg)", [](double) { return true; }) * kDeg;
-  if (tr.Has("pivot")) t.pivot_offset = tr.Vector("pivot", "a list of 3 numbers [x, y, z] (m, l_scoop)");
+  if (tr.Has("pivot"))
+    t.pivot_offset = tr.Vector("pivot", "a list of 3 numbers [x, y, z] (m, l_scoop)");
   t.initial_pitch =
       tr.Number("initial_pitch", t.initial_pitch / kDeg, "a number in [-180, 180] (deg)",
                 [](double v) { return v >= -180 && v <= 180; }) *
@@ -439,11 +443,10 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
                      ": dig.trajectory." + what);
   }
   if (!t.approach.enabled && !t.rotation1.enabled && !t.linear.enabled && !t.rotation2.enabled)
-    Fail(file, LineOf(traj_node), "dig.trajectory", "at least one segment (preset or map)",
-         "none");
+    Fail(file, LineOf(traj_node), "dig.trajectory", "at least one segment (preset or map)", "none");
 
-  dig.passes = static_cast<int>(
-      d.Integer("passes", 1, "an integer in [1, 100]", [](int64_t v) { return v >= 1 && v <= 100; }));
+  dig.passes = static_cast<int>(d.Integer("passes", 1, "an integer in [1, 100]",
+                                          [](int64_t v) { return v >= 1 && v <= 100; }));
   dig.bite_depth = d.Number("bite_depth", dig.bite_depth, "a number >= 0 (m)", NonNegative);
   if (d.Has("surface")) {
     const YAML::Node sf = node["surface"];
@@ -482,9 +485,9 @@ void ParseSleep(const std::string& file, const YAML::Node& node, dem::SleepConfi
   sleep->check_every = static_cast<int>(m.Integer("check_every", sleep->check_every,
                                                   "an integer in [1, 100000] (steps)",
                                                   [](int64_t v) { return v >= 1 && v <= 100000; }));
-  sleep->quiet_checks = static_cast<int>(m.Integer(
-      "quiet_checks", sleep->quiet_checks, "an integer in [1, 250]",
-      [](int64_t v) { return v >= 1 && v <= 250; }));
+  sleep->quiet_checks =
+      static_cast<int>(m.Integer("quiet_checks", sleep->quiet_checks, "an integer in [1, 250]",
+                                 [](int64_t v) { return v >= 1 && v <= 250; }));
 }
 
 // The `render:` block of a scene (frames of `scoopsim run --frames`, `scoopsim render`).

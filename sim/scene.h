@@ -43,9 +43,9 @@ struct OutputSpec {
 // The scoop: a triangle mesh in the l_scoop frame, its mass properties and the cavity that holds
 // the collected sample.
 struct ScoopSpec {
-  std::string mesh;       // mesh file (any format assimp reads), resolved against the scene
-  double scale = 1.0;     // mesh units -> m
-  std::string material;   // scoop material (key dig.scoop.material)
+  std::string mesh;      // mesh file (any format assimp reads), resolved against the scene
+  double scale = 1.0;    // mesh units -> m
+  std::string material;  // scoop material (key dig.scoop.material)
   int material_index = -1;
   double mass = 0.30936;                   // [kg] (FACTS.md section 2, l_scoop)
   dem::Vec3 com{0.001315, 0.0, 0.045328};  // centre of mass in l_scoop [m]
@@ -66,8 +66,8 @@ struct DigSpec {
   TrajectorySpec trajectory;    // pivot_start.z is set per pass at run time
   double heading = 0;           // trench direction: rotation about world z from +x [rad]
   int passes = 1;
-  double bite_depth = 0.015;  // [m]
-  double surface = 0;         // world z of the original surface [m] (when surface_given)
+  double bite_depth = 0.015;   // [m]
+  double surface = 0;          // world z of the original surface [m] (when surface_given)
   bool surface_given = false;  // else measured from the settled bed
   double interval = 1e-3;      // time between rows of /scoop/ [s]
   bool start_buried = false;   // place the tool at its start pose in the bed (particles it

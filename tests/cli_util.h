@@ -13,7 +13,8 @@ namespace scoopsim_test {
 // A folder of this test process, <tmp>/scoopsim_<tag>_<pid>, emptied at its first use.
 inline std::filesystem::path ProcessTempDir(const std::string& tag) {
   namespace fs = std::filesystem;
-  const fs::path p = fs::temp_directory_path() / ("scoopsim_" + tag + "_" + std::to_string(::getpid()));
+  const fs::path p =
+      fs::temp_directory_path() / ("scoopsim_" + tag + "_" + std::to_string(::getpid()));
   fs::remove_all(p);
   fs::create_directories(p);
   return p;

@@ -32,7 +32,8 @@ TriangleMesh GridFloor(double size, int cells, int material, const Vec3& shift =
   m.material = material;
   const double h = size / cells;
   for (int j = 0; j <= cells; ++j)
-    for (int i = 0; i <= cells; ++i) m.vertices.push_back(Vec3{-0.5 * size + i * h, -0.5 * size + j * h, 0} + shift);
+    for (int i = 0; i <= cells; ++i)
+      m.vertices.push_back(Vec3{-0.5 * size + i * h, -0.5 * size + j * h, 0} + shift);
   auto id = [&](int i, int j) { return static_cast<int32_t>(j * (cells + 1) + i); };
   for (int j = 0; j < cells; ++j)
     for (int i = 0; i < cells; ++i) {
@@ -52,7 +53,8 @@ TriangleMesh GridFloor(double size, int cells, int material, const Vec3& shift =
 TriangleMesh Cube(double h, int material) {
   TriangleMesh m;
   m.material = material;
-  for (int k = 0; k < 8; ++k) m.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
+  for (int k = 0; k < 8; ++k)
+    m.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
   const int32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
                            {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : f) {

@@ -45,8 +45,8 @@ TEST(SleepTest, RestingLayerSleepsAndImpactWakesOnlyWhatItTouches) {
   EXPECT_EQ(s.awake_count(), 0);  // all quiet: asleep
   const Particles before = s.particles();
   // Drop a sphere at 0.5 m/s onto particle (5, 5) (id 105).
-  const Vec3 target = before.x[0] * 0.0 + Vec3{0.01 + 5 * 2.2 * kRadius, 0.01 + 5 * 2.2 * kRadius,
-                                               kRadius};
+  const Vec3 target =
+      before.x[0] * 0.0 + Vec3{0.01 + 5 * 2.2 * kRadius, 0.01 + 5 * 2.2 * kRadius, kRadius};
   s.AddParticle(target + Vec3{0, 0, 2 * kRadius + 1e-4}, {0, 0, -0.5}, {}, kRadius, 0);
   test::StepOk(s, 200);
   const Particles& p = s.particles();
@@ -57,8 +57,8 @@ TEST(SleepTest, RestingLayerSleepsAndImpactWakesOnlyWhatItTouches) {
     // The struck sphere woke and moved; every other sphere is bitwise where it slept.
     for (size_t b = 0; b < before.size(); ++b)
       if (before.id[b] == p.id[i]) {
-        const bool same = p.x[i].x == before.x[b].x && p.x[i].y == before.x[b].y &&
-                          p.x[i].z == before.x[b].z;
+        const bool same =
+            p.x[i].x == before.x[b].x && p.x[i].y == before.x[b].y && p.x[i].z == before.x[b].z;
         if (!same) ++moved;
         if (hit) {
           EXPECT_FALSE(same);
@@ -78,7 +78,8 @@ TEST(SleepTest, ApproachingMeshWakesItsZone) {
   TriangleMesh cube;
   cube.material = 1;
   const double h = 0.004;
-  for (int k = 0; k < 8; ++k) cube.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
+  for (int k = 0; k < 8; ++k)
+    cube.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
   const int32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
                            {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : f) {
@@ -120,7 +121,8 @@ uint64_t RainHash(int threads) {
   TriangleMesh cube;
   cube.material = 1;
   const double h = 0.003;
-  for (int k = 0; k < 8; ++k) cube.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
+  for (int k = 0; k < 8; ++k)
+    cube.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
   const int32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
                            {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : f) {

@@ -1,6 +1,8 @@
 // The scoop wrench in the study's frames (paper eqs. 2-3, Fig. 1) and the dig's helpers, against
 // closed forms: a known force at a known point, frame invariance under a rotation of the whole
 // scene about the vertical, the free-surface height of a lattice, the cavity test.
+#include "sim/dig.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 #include <string>
 
 #include "dem/system.h"
-#include "sim/dig.h"
 #include "sim/runner.h"
 #include "sim/scene.h"
 
@@ -161,9 +162,10 @@ DigSummary TinyDig(const std::string& material, double bite, const std::string& 
   scene.dig.bite_depth = bite;
   const int bed = scene.materials.Find(material);
   // Same settling speed whatever the density: the kinetic-energy threshold scales with it.
-  scene.bed.settle_ke *= scene.materials[bed].density / scene.materials[scene.materials.Find("snow")].density;
-  scene.time_step = scene.rayleigh_fraction * dem::RayleighTimeStep(scene.bed.radius_min,
-                                                                    scene.materials[bed]);
+  scene.bed.settle_ke *=
+      scene.materials[bed].density / scene.materials[scene.materials.Find("snow")].density;
+  scene.time_step =
+      scene.rayleigh_fraction * dem::RayleighTimeStep(scene.bed.radius_min, scene.materials[bed]);
   DigSummary summary;
   RunOptions options;
   options.output = ::testing::TempDir() + out;
@@ -202,10 +204,9 @@ const std::string kSource = SCOOPSIM_SOURCE_DIR;
 
 // Every shipped dig scene loads; the presets reproduce paper Tables 1 and 4.
 TEST(DigSceneTest, ShippedDigScenesLoad) {
-  for (const char* file :
-       {"quick_dig.yaml", "tiny_dig.yaml", "paper/lut_snow_b15.yaml", "paper/lut_ice_b3.yaml",
-        "paper/size_S3p25.yaml", "paper/bed_snow.yaml", "testbed_sand.yaml", "sleep_check.yaml",
-        "paper/snow_b15_pass1.yaml"}) {
+  for (const char* file : {"quick_dig.yaml", "tiny_dig.yaml", "paper/lut_snow_b15.yaml",
+                           "paper/lut_ice_b3.yaml", "paper/size_S3p25.yaml", "paper/bed_snow.yaml",
+                           "testbed_sand.yaml", "sleep_check.yaml", "paper/snow_b15_pass1.yaml"}) {
     SCOPED_TRACE(file);
     const Scene s = LoadScene(kSource + "/scenes/" + file);
     if (std::string(file).rfind("paper/bed_", 0) == 0) {
@@ -235,7 +236,8 @@ gravity: [0, 0, -1.3]
 box: {min: [0, 0, 0], max: [0.37, 0.17, 0.2], wall_material: wall}
 bed: {material: snow, radius: 8.0e-3, count: 100}
 dig:
-  scoop: {mesh: )" + kSource + R"(/assets/scoop.stl, material: aluminium}
+  scoop: {mesh: )" + kSource +
+                           R"(/assets/scoop.stl, material: aluminium}
   trajectory:
     preset: table1
     start: [0.13, 0.085]
@@ -250,20 +252,29 @@ sleep: {enabled: true}
     const char* expect;
   };
   const Case cases[] = {
-      {"preset: table1", "preset: table9", ":8: dig.trajectory.preset: expected table1, table4 or none, got table9"},
-      {"mesh: ", "mesh: /nonexistent/", ":6: dig.scoop.mesh: expected the path of a readable mesh file"},
-      {"material: aluminium", "material: gold", ":6: dig.scoop.material: expected a material defined in"},
-      {"speed: 0.3", "speed: -0.3", ":10: dig.trajectory.linear.speed: expected a number > 0, got -0.3"},
+      {"preset: table1", "preset: table9",
+       ":8: dig.trajectory.preset: expected table1, table4 or none, got table9"},
+      {"mesh: ", "mesh: /nonexistent/",
+       ":6: dig.scoop.mesh: expected the path of a readable mesh file"},
+      {"material: aluminium", "material: gold",
+       ":6: dig.scoop.material: expected a material defined in"},
+      {"speed: 0.3", "speed: -0.3",
+       ":10: dig.trajectory.linear.speed: expected a number > 0, got -0.3"},
       {"start: 3.0", "start: 2.5", ":10: dig.trajectory.linear.start: expected a time >= 3 s"},
       {"material: aluminium}", "material: aluminium, density: 2700, mass: 0.3}",
-       ":6: dig.scoop.density: expected either density (mass properties from the mesh) or mass and com, got both"},
+       ":6: dig.scoop.density: expected either density (mass properties from the mesh) or mass and "
+       "com, got both"},
       {"material: aluminium}", "material: aluminium, density: -1}",
        ":6: dig.scoop.density: expected a number > 0 (kg/m^3), got -1"},
       {"passes: 1", "passes: 0", ":11: dig.passes: expected an integer in [1, 100], got 0"},
-      {"bite_depth: 0.02", "bite_depth: -0.02", ":12: dig.bite_depth: expected a number >= 0 (m), got -0.02"},
-      {"start: [0.13, 0.085]", "start: [0.13]", ":9: dig.trajectory.start: expected a list of 2 numbers"},
-      {"sleep: {enabled: true}", "sleep: {enabled: maybe}", ":13: sleep.enabled: expected true or false, got maybe"},
-      {"    preset: table1", "    preset: table1\n    pivto: [0, 0, 0]", ":9: dig.trajectory.pivto: expected one of the keys"},
+      {"bite_depth: 0.02", "bite_depth: -0.02",
+       ":12: dig.bite_depth: expected a number >= 0 (m), got -0.02"},
+      {"start: [0.13, 0.085]", "start: [0.13]",
+       ":9: dig.trajectory.start: expected a list of 2 numbers"},
+      {"sleep: {enabled: true}", "sleep: {enabled: maybe}",
+       ":13: sleep.enabled: expected true or false, got maybe"},
+      {"    preset: table1", "    preset: table1\n    pivto: [0, 0, 0]",
+       ":9: dig.trajectory.pivto: expected one of the keys"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.to);
