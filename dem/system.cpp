@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <cstring>
@@ -841,6 +842,40 @@ void System::SetMeshMotion(int k, const MeshMotion& motion) {
     ms.world[a] = Apply(pose, ms.mesh.vertices[a]);
 }
 
+namespace {
+
+// World bounding box of each triangle grown by `margin` (lo at 2e, hi at 2e + 1), and the box
+// around them all.
+void TriangleBoxes(const std::vector<Vec3>& world, const std::vector<std::array<int32_t, 3>>& tris,
+                   double margin, std::vector<Vec3>* box, Vec3* all_lo, Vec3* all_hi) {
+  box->resize(2 * tris.size());
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  const Vec3 grow{margin, margin, margin};
+  for (size_t e = 0; e < tris.size(); ++e) {
+    const Vec3 &a = world[tris[e][0]], &b = world[tris[e][1]], &c = world[tris[e][2]];
+    const Vec3 tlo =
+        Vec3{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})} -
+        grow;
+    const Vec3 thi =
+        Vec3{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})} +
+        grow;
+    (*box)[2 * e] = tlo;
+    (*box)[2 * e + 1] = thi;
+    lo = {std::min(lo.x, tlo.x), std::min(lo.y, tlo.y), std::min(lo.z, tlo.z)};
+    hi = {std::max(hi.x, thi.x), std::max(hi.y, thi.y), std::max(hi.z, thi.z)};
+  }
+  *all_lo = lo;
+  *all_hi = hi;
+}
+
+// Whether c lies within the box [lo, hi] grown by d.
+inline bool InBox(const Vec3& c, const Vec3& lo, const Vec3& hi, double d) {
+  return !(c.x < lo.x - d || c.x > hi.x + d || c.y < lo.y - d || c.y > hi.y + d || c.z < lo.z - d ||
+           c.z > hi.z + d);
+}
+
+}  // namespace
+
 // Candidates of mesh k: every (particle, triangle) pair closer than r + skin now. They stay valid
 // while the mesh's largest vertex displacement plus the particles' largest displacement since
 // the build stays below the skin (checked in MeshForces).
@@ -851,33 +886,19 @@ void System::BuildMeshCandidates(int k) {
   const auto& tris = ms.mesh.triangles;
   const size_t nt = tris.size();
   // World bounding boxes of the triangles and of the whole mesh.
-  std::vector<Vec3>& lo = m.scratch_v;
-  lo.resize(2 * nt);
-  Vec3 mlo{1e300, 1e300, 1e300}, mhi{-1e300, -1e300, -1e300};
-  for (size_t e = 0; e < nt; ++e) {
-    const Vec3 &a = ms.world[tris[e][0]], &b = ms.world[tris[e][1]], &c = ms.world[tris[e][2]];
-    const Vec3 tlo{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
-    const Vec3 thi{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
-    lo[2 * e] = tlo;
-    lo[2 * e + 1] = thi;
-    mlo = {std::min(mlo.x, tlo.x), std::min(mlo.y, tlo.y), std::min(mlo.z, tlo.z)};
-    mhi = {std::max(mhi.x, thi.x), std::max(mhi.y, thi.y), std::max(mhi.z, thi.z)};
-  }
+  std::vector<Vec3>& box = m.scratch_v;
+  Vec3 mlo, mhi;
+  TriangleBoxes(ms.world, tris, 0.0, &box, &mlo, &mhi);
   ms.group_particle.clear();
   ms.group_start.clear();
   ms.cand_tri.clear();
   for (size_t i = 0; i < n; ++i) {
     const Vec3 c = p_.x[i];
     const double reach = p_.radius[i] + m.skin;
-    if (c.x < mlo.x - reach || c.x > mhi.x + reach || c.y < mlo.y - reach || c.y > mhi.y + reach ||
-        c.z < mlo.z - reach || c.z > mhi.z + reach)
-      continue;
+    if (!InBox(c, mlo, mhi, reach)) continue;
     const size_t first = ms.cand_tri.size();
     for (size_t e = 0; e < nt; ++e) {
-      const Vec3 &tlo = lo[2 * e], &thi = lo[2 * e + 1];
-      if (c.x < tlo.x - reach || c.x > thi.x + reach || c.y < tlo.y - reach ||
-          c.y > thi.y + reach || c.z < tlo.z - reach || c.z > thi.z + reach)
-        continue;
+      if (!InBox(c, box[2 * e], box[2 * e + 1], reach)) continue;
       const ClosestPoint cp = ClosestPointOnTriangle(c, ms.world[tris[e][0]], ms.world[tris[e][1]],
                                                      ms.world[tris[e][2]]);
       if (Norm2(c - cp.point) < reach * reach) ms.cand_tri.push_back(static_cast<int32_t>(e));
@@ -1108,32 +1129,16 @@ void System::UpdateSleep() {
   zone.assign(n, 0);
   for (const Impl::MeshState& ms : m.meshes) {
     const auto& tris = ms.mesh.triangles;
-    std::vector<Vec3> box(2 * tris.size());
-    Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-    for (size_t e = 0; e < tris.size(); ++e) {
-      const Vec3 &a = ms.world[tris[e][0]], &b = ms.world[tris[e][1]], &c = ms.world[tris[e][2]];
-      box[2 * e] =
-          Vec3{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})} -
-          Vec3{d_out, d_out, d_out};
-      box[2 * e + 1] =
-          Vec3{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})} +
-          Vec3{d_out, d_out, d_out};
-      lo = {std::min(lo.x, box[2 * e].x), std::min(lo.y, box[2 * e].y),
-            std::min(lo.z, box[2 * e].z)};
-      hi = {std::max(hi.x, box[2 * e + 1].x), std::max(hi.y, box[2 * e + 1].y),
-            std::max(hi.z, box[2 * e + 1].z)};
-    }
+    std::vector<Vec3> box;
+    Vec3 lo, hi;
+    TriangleBoxes(ms.world, tris, d_out, &box, &lo, &hi);
 #pragma omp parallel for schedule(static) num_threads(num_threads_)
     for (size_t i = 0; i < n; ++i) {
       const Vec3 c = p_.x[i];
-      if (zone[i] == 2 || c.x < lo.x || c.x > hi.x || c.y < lo.y || c.y > hi.y || c.z < lo.z ||
-          c.z > hi.z)
-        continue;
+      if (zone[i] == 2 || !InBox(c, lo, hi, 0.0)) continue;
       double best2 = d_out * d_out;
       for (size_t e = 0; e < tris.size(); ++e) {
-        const Vec3 &blo = box[2 * e], &bhi = box[2 * e + 1];
-        if (c.x < blo.x || c.x > bhi.x || c.y < blo.y || c.y > bhi.y || c.z < blo.z || c.z > bhi.z)
-          continue;
+        if (!InBox(c, box[2 * e], box[2 * e + 1], 0.0)) continue;
         const ClosestPoint cp = ClosestPointOnTriangle(c, ms.world[tris[e][0]],
                                                        ms.world[tris[e][1]], ms.world[tris[e][2]]);
         best2 = std::min(best2, Norm2(c - cp.point));
