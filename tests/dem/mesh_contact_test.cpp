@@ -49,21 +49,6 @@ TriangleMesh GridFloor(double size, int cells, int material, const Vec3& shift =
   return m;
 }
 
-// Axis-aligned box [-h, h]^3 as 12 outward triangles.
-TriangleMesh Cube(double h, int material) {
-  TriangleMesh m;
-  m.material = material;
-  for (int k = 0; k < 8; ++k)
-    m.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
-  const int32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : f) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
-}
-
 MeshMotion AtRest(const Vec3& position = {}) {
   MeshMotion mm;
   mm.pose.position = position;
@@ -148,7 +133,7 @@ TEST_P(MeshRestitutionTest, FaceEdgeVertex) {
   System s(test::SnowAndSteel({e, 0.5, 0.05}, {e, 0.5, 0.05}), Config({0, 0, 0}));
   s.set_num_threads(1);
   const double h = 0.005;
-  const int cube = s.AddMesh(Cube(h, 1));
+  const int cube = s.AddMesh(test::Cube(h, 1));
   s.SetMeshMotion(cube, AtRest());
   // Direction of approach: towards the face centre, edge midpoint, or corner.
   Vec3 dir = feature == 0 ? Vec3{0, 0, 1} : feature == 1 ? Vec3{0, 1, 1} : Vec3{1, 1, 1};

@@ -75,17 +75,8 @@ TEST(SleepTest, ApproachingMeshWakesItsZone) {
   System s(test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05}), LayerConfig());
   s.set_num_threads(1);
   AddLayer(s);
-  TriangleMesh cube;
-  cube.material = 1;
   const double h = 0.004;
-  for (int k = 0; k < 8; ++k)
-    cube.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
-  const int32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : f) {
-    cube.triangles.push_back({q[0], q[1], q[2]});
-    cube.triangles.push_back({q[0], q[2], q[3]});
-  }
+  const TriangleMesh cube = test::Cube(h, 1);
   const int k = s.AddMesh(cube);
   MeshMotion mm;
   mm.pose.position = {0.03, 0.03, 0.08};  // far above
@@ -118,17 +109,8 @@ uint64_t RainHash(int threads) {
   for (int k = 0; k < 30; ++k)
     s.AddParticle({0.012 + 0.0013 * k, 0.02 + 0.0009 * k, 0.01 + 0.004 * (k % 5)}, {0, 0, -0.3}, {},
                   kRadius, 0);
-  TriangleMesh cube;
-  cube.material = 1;
   const double h = 0.003;
-  for (int k = 0; k < 8; ++k)
-    cube.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
-  const int32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : f) {
-    cube.triangles.push_back({q[0], q[1], q[2]});
-    cube.triangles.push_back({q[0], q[2], q[3]});
-  }
+  const TriangleMesh cube = test::Cube(h, 1);
   const int mesh = s.AddMesh(cube);
   int64_t touched = 0;
   const double dt = s.config().time_step, u = 1.0;  // 1 cm in the run: through two columns

@@ -23,6 +23,21 @@ inline MaterialTable SnowAndSteel(const Interaction& snow_snow, const Interactio
   return t;
 }
 
+// Axis-aligned cube [-h, h]^3 as 12 triangles, counter-clockwise seen from outside.
+inline TriangleMesh Cube(double h, int material) {
+  TriangleMesh m;
+  m.material = material;
+  for (int k = 0; k < 8; ++k)
+    m.vertices.push_back({k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h});
+  const int32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : f) {
+    m.triangles.push_back({q[0], q[1], q[2]});
+    m.triangles.push_back({q[0], q[2], q[3]});
+  }
+  return m;
+}
+
 inline Plane Floor(double z = 0.0, int material = 1) {
   return Plane{"floor", Vec3{0, 0, z}, Vec3{0, 0, 1}, material};
 }
