@@ -73,6 +73,8 @@ struct System::Impl {
                                   // the shear of a pair that did not is stale and reads as zero
   std::vector<Vec3> x_build;      // positions at the last build [m] (N)
   double drift_bound = 0;         // upper bound on any displacement since the last build [m]
+  double asleep_drift = 0;  // largest displacement since the last build of a particle that has
+                            // fallen asleep since (it moves no more) [m]
   double skin = 0;
   double cutoff_radius = 0;  // largest radius the grid was set up for [m]
   size_t grid_capacity = 0;  // particle count the grid was sized for
@@ -121,16 +123,17 @@ struct System::Impl {
   int64_t awake = 0;
   int64_t sleep_counter = 0;    // steps since the last sleep check
   std::vector<int32_t> active;  // storage indices of the awake particles (sleep enabled)
-  // With sleeping: the particles that own list pairs or wall candidates (the force pass skips
-  // the rest), in storage order, and where each slab's run of them starts (slabs + 1).
+  // With sleeping: the particles that own a list pair with an awake end, or are awake and own
+  // wall candidates (the force pass skips the rest), in storage order, and where each slab's run
+  // of them starts (slabs + 1). Refreshed when a particle wakes or falls asleep.
   std::vector<int32_t> busy, slab_busy;
+  bool busy_valid = false;
   bool active_valid = false;
 
   std::vector<ContactBatch> batches;  // one per thread
   size_t batch_capacity = 0;
 
   std::vector<ContactRecord> pending;  // history to apply at the next build
-  std::vector<ContactRecord> dormant;  // history of contacts between two sleeping particles
   std::vector<int32_t> perm, visit, index_of_id;
   std::vector<double> scratch_d;
   std::vector<int64_t> scratch_i64;
@@ -250,7 +253,6 @@ void System::RemoveParticles(const std::vector<int64_t>& ids) {
     ms.history.resize(kept);
   }
   impl_->pending = std::move(keep);
-  impl_->dormant.clear();
   impl_->list_valid = false;
   impl_->needs_rebuild = true;
 }
@@ -294,7 +296,6 @@ std::vector<ContactRecord> System::Contacts() const {
             {p_.id[m.wall_i[e]], -1 - static_cast<int64_t>(m.wall_k[e]), m.wall_shear[e]});
   }
   out.insert(out.end(), m.pending.begin(), m.pending.end());
-  out.insert(out.end(), m.dormant.begin(), m.dormant.end());
   std::sort(out.begin(), out.end(), [](const ContactRecord& l, const ContactRecord& r) {
     return l.a != r.a ? l.a < r.a : l.b < r.b;
   });
@@ -304,7 +305,6 @@ std::vector<ContactRecord> System::Contacts() const {
 void System::SetContacts(const std::vector<ContactRecord>& contacts) {
   // Replaces all history: the next build takes it from these records only.
   impl_->pending = contacts;
-  impl_->dormant.clear();
   impl_->list_valid = false;
   impl_->needs_rebuild = true;
 }
@@ -314,9 +314,8 @@ void System::Rebuild() {
   const size_t n = p_.size();
   // 1. Keep the history of the current contacts by persistent id.
   if (m.list_valid) {
-    std::vector<ContactRecord> records = Contacts();  // includes pending and dormant
+    std::vector<ContactRecord> records = Contacts();  // includes pending
     m.pending.swap(records);
-    m.dormant.clear();
   }
   // 2. Grid sized for the present particles; reorder storage by cell, ties by persistent id.
   // The grid spans the particles' bounding box (within the domain), so that every slab holds
@@ -377,21 +376,9 @@ void System::Rebuild() {
   }
 
   // 3. Particle pairs and particle-plane candidates within reach (+ skin).
+  // With sleeping, the pairs of two sleepers stay listed (the force pass skips them and keeps
+  // their history), so that a particle that wakes needs no rebuild: its pairs are already there.
   m.list.Build(p_.x.data(), p_.radius.data(), n, m.skin, num_threads_);
-  // Two sleeping particles never interact: drop their pairs (the list stays sorted by owner).
-  if (config_.sleep.enabled) {
-    int32_t out = 0;
-    for (size_t i = 0; i < n; ++i) {
-      const int32_t begin = m.list.start[i], end = m.list.start[i + 1];
-      m.list.start[i] = out;
-      for (int32_t k = begin; k < end; ++k) {
-        const int32_t j = m.list.partner[k];
-        if (p_.awake[i] || p_.awake[j]) m.list.partner[out++] = j;
-      }
-    }
-    m.list.start[n] = out;
-    m.list.partner.resize(out);
-  }
   m.shear.assign(m.list.num_pairs(), Vec3{});
   m.touching.assign(m.list.num_pairs(), 0);
   int32_t longest = 0;
@@ -402,7 +389,6 @@ void System::Rebuild() {
   m.wall_start.resize(n + 1);
   for (size_t i = 0; i < n; ++i) {
     m.wall_start[i] = static_cast<int32_t>(m.wall_i.size());
-    if (!p_.awake[i]) continue;  // a sleeping particle does not move: no wall contact to compute
     for (size_t k = 0; k < config_.planes.size(); ++k) {
       const Plane& pl = config_.planes[k];
       if (Dot(p_.x[i] - pl.point, pl.normal) < p_.radius[i] + m.skin) {
@@ -415,8 +401,6 @@ void System::Rebuild() {
   m.wall_shear.assign(m.wall_i.size(), Vec3{});
 
   // 4. Put the kept history back on the new entries (sign flips if the pair's owner changed).
-  //    History between two sleeping particles is kept aside until one of them wakes.
-  m.dormant.clear();
   for (const ContactRecord& c : m.pending) {
     if (c.a < 0 || c.a >= next_id_) continue;
     const int32_t ia = m.index_of_id[c.a];
@@ -425,10 +409,6 @@ void System::Rebuild() {
       if (c.b >= next_id_ || m.index_of_id[c.b] < 0) continue;
       const int32_t ib = m.index_of_id[c.b];
       const int32_t owner = std::min(ia, ib), other = std::max(ia, ib);
-      if (!p_.awake[ia] && !p_.awake[ib]) {
-        m.dormant.push_back(c);
-        continue;
-      }
       for (int32_t k = m.list.start[owner]; k < m.list.start[owner + 1]; ++k)
         if (m.list.partner[k] == other) {
           m.shear[k] = owner == ia ? c.shear : -c.shear;
@@ -436,10 +416,6 @@ void System::Rebuild() {
           break;
         }
     } else {
-      if (!p_.awake[ia]) {
-        m.dormant.push_back(c);
-        continue;
-      }
       const int32_t plane = static_cast<int32_t>(-1 - c.b);
       for (int32_t e = m.wall_start[ia]; e < m.wall_start[ia + 1]; ++e)
         if (m.wall_k[e] == plane) m.wall_shear[e] = c.shear;
@@ -448,21 +424,30 @@ void System::Rebuild() {
   m.pending.clear();
   m.x_build = p_.x;
   m.drift_bound = 0;
-  if (config_.sleep.enabled) {
-    m.busy.clear();
-    m.slab_busy.assign(m.list.num_slabs() + 1, 0);
-    for (int sl = 0; sl < m.list.num_slabs(); ++sl) {
-      m.slab_busy[sl] = static_cast<int32_t>(m.busy.size());
-      for (int32_t i = m.list.slab_start[sl]; i < m.list.slab_start[sl + 1]; ++i)
-        if (m.list.start[i + 1] > m.list.start[i] || m.wall_start[i + 1] > m.wall_start[i])
-          m.busy.push_back(i);
-    }
-    m.slab_busy[m.list.num_slabs()] = static_cast<int32_t>(m.busy.size());
-  }
+  m.asleep_drift = 0;
   m.list_valid = true;
   m.needs_rebuild = false;
   m.active_valid = false;
+  m.busy_valid = false;
   ++builds_;
+}
+
+void System::RefreshBusy() {
+  Impl& m = *impl_;
+  const uint8_t* awake = p_.awake.data();
+  m.busy.clear();
+  m.slab_busy.assign(m.list.num_slabs() + 1, 0);
+  for (int sl = 0; sl < m.list.num_slabs(); ++sl) {
+    m.slab_busy[sl] = static_cast<int32_t>(m.busy.size());
+    for (int32_t i = m.list.slab_start[sl]; i < m.list.slab_start[sl + 1]; ++i) {
+      bool busy = awake[i] && m.wall_start[i + 1] > m.wall_start[i];
+      for (int32_t k = m.list.start[i]; k < m.list.start[i + 1] && !busy; ++k)
+        busy = awake[i] || awake[m.list.partner[k]];
+      if (busy) m.busy.push_back(i);
+    }
+  }
+  m.slab_busy[m.list.num_slabs()] = static_cast<int32_t>(m.busy.size());
+  m.busy_valid = true;
 }
 
 // Hertz-Mindlin forces of a batch of particle pairs: the same law as EvaluateContact
@@ -574,7 +559,9 @@ void System::ComputeForces() {
   const Plane* planes = config_.planes.data();
 
   const bool compact = config_.sleep.enabled;
+  if (compact && !m.busy_valid) RefreshBusy();
   const int32_t* busy = m.busy.data();
+  const uint8_t* awake = p_.awake.data();
   if (m.batches.size() < static_cast<size_t>(num_threads_)) m.batches.resize(num_threads_);
   for (ContactBatch& b : m.batches)
     if (b.i.size() < m.batch_capacity) b.Resize(m.batch_capacity);
@@ -606,15 +593,18 @@ void System::ComputeForces() {
             if (nb + static_cast<size_t>(start[i + 1] - start[i]) > m.batch_capacity) break;
             const Vec3 xi = x[i];
             const double ri = radius[i];
+            const bool awake_i = !compact || awake[i];
             for (int32_t k = start[i]; k < start[i + 1]; ++k) {
               const int32_t j = partner[k];
               const double rsum = ri + radius[j];
-              const bool contact = Norm2(x[j] - xi) < rsum * rsum;
+              // Two sleepers do not interact; their pair keeps its history untouched.
+              const bool live = awake_i || awake[j];
+              const bool contact = live && Norm2(x[j] - xi) < rsum * rsum;
               batch.i[nb] = i;
               batch.j[nb] = j;
               batch.k[nb] = k;
               batch.was[nb] = touched[k];
-              touched[k] = contact;
+              touched[k] = live ? contact : touched[k];
               nb += contact;
             }
           }
@@ -666,7 +656,7 @@ void System::ComputeForces() {
           touching += static_cast<int64_t>(nb);
           for (int32_t at = block; at < block_end; ++at) {
             const int32_t i = compact ? busy[at] : at;
-            if (wall_start[i] == wall_start[i + 1]) continue;
+            if (wall_start[i] == wall_start[i + 1] || !awake[i]) continue;
             const Vec3 xi = x[i], vi = v[i], wi = w[i];
             const double ri = radius[i], mi = mass[i], inv_ii = inv_inertia[i];
             Vec3 fi, ti;
@@ -757,10 +747,15 @@ StepStatus System::Step() {
   m.drift_bound += dt * std::sqrt(max_v2);
   bool rebuild = m.needs_rebuild || !have_build;
   if (!rebuild && m.drift_bound > half_skin) {
-    double max_disp2 = 0;
+    // With sleeping only the awake particles can have moved on; the sleepers' share is kept in
+    // asleep_drift.
+    double max_disp2 = m.asleep_drift * m.asleep_drift;
     const Vec3* xb = m.x_build.data();
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : max_disp2)
-    for (size_t i = 0; i < n; ++i) max_disp2 = std::max(max_disp2, Norm2(x[i] - xb[i]));
+    for (int64_t a = 0; a < n_moving; ++a) {
+      const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
+      max_disp2 = std::max(max_disp2, Norm2(x[i] - xb[i]));
+    }
     m.drift_bound = std::sqrt(max_disp2);
     rebuild = !(m.drift_bound <= half_skin);  // also on NaN
   }
@@ -1061,11 +1056,11 @@ void System::MeshForces() {
       wrench.contacts += ms.group_new[g];
       for (int a = 0; a < ms.group_new[g]; ++a)
         ms.history.push_back(ms.fresh[static_cast<size_t>(kMaxContacts) * g + a]);
-      if (!p_.awake[i]) {  // a mesh touched a sleeping particle: wake it, pairs come next step
+      if (!p_.awake[i]) {  // a mesh touched a sleeping particle: wake it (its pairs are listed)
         p_.awake[i] = 1;
         p_.f[i] = ms.group_force[g];  // at rest in equilibrium but for the mesh's push
         p_.t[i] = ms.group_torque[g];
-        m.needs_rebuild = true;
+        m.busy_valid = false;
         m.active_valid = false;
       }
     }
@@ -1177,6 +1172,9 @@ void System::UpdateSleep() {
         p_.v[i] = Vec3{};
         p_.w[i] = Vec3{};
         m.active_valid = false;
+        m.busy_valid = false;
+        if (m.x_build.size() == n)
+          m.asleep_drift = std::max(m.asleep_drift, Norm(p_.x[i] - m.x_build[i]));
       } else {
         ++a;
       }
@@ -1185,7 +1183,7 @@ void System::UpdateSleep() {
   }
   m.awake = awake;
   if (woke) {
-    m.needs_rebuild = true;
+    m.busy_valid = false;
     m.active_valid = false;
   }
 }

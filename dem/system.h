@@ -32,8 +32,8 @@ struct SleepConfig {
   double wake_speed = 1e-3;     // a sleeping particle touched by one faster than this wakes [m/s]
   double wake_distance = 0.01;  // particles whose centre is this close to a mesh stay awake [m]
   double wake_margin = 0.005;   // when a sleeper enters that zone, every sleeper within
-                                // wake_distance + wake_margin wakes at once, so wake-ups (each a
-                                // neighbour-list rebuild) come once per wake_margin of travel [m]
+                                // wake_distance + wake_margin wakes at once, so wake-ups come
+                                // once per wake_margin of travel [m]
   int check_every = 50;         // steps between sleep/wake checks
   int quiet_checks = 5;         // consecutive quiet checks before a particle falls asleep
 };
@@ -181,6 +181,7 @@ class System {
   void BuildMeshCandidates(int k);
   void UpdateSleep();    // sleep/wake decisions every sleep.check_every steps
   void RefreshActive();  // list the awake particles
+  void RefreshBusy();    // list the particles the force pass visits (sleeping on)
   struct ContactBatch;
   void PairForces(ContactBatch& batch, size_t n);  // forces of a batch of touching pairs
 

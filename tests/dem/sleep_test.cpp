@@ -100,6 +100,55 @@ TEST(SleepTest, ApproachingMeshWakesItsZone) {
   EXPECT_EQ(s.awake_count(), expected);
 }
 
+// Contact history survives sleep, and waking needs no neighbour-list rebuild. Rows of touching
+// spheres (along x) are set sliding sideways in alternate directions, so that their mutual and
+// floor contacts store tangential springs when friction stops them; once all sleep, a cube lowered
+// into the wake zone (not touching) wakes them. A woken sphere starts at rest (v = 0, f = 0), so
+// its first step adds v_rel dt = 0 to every spring: the records must come back as they were put
+// to sleep (relative 1e-12), and the build count must not change across the wake.
+TEST(SleepTest, WakingKeepsContactHistoryAndCostsNoRebuild) {
+  System s(test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05}), LayerConfig());
+  s.set_num_threads(1);
+  for (int j = 0; j < 10; ++j)
+    for (int i = 0; i < 10; ++i)
+      s.AddParticle({0.01 + i * 1.9998 * kRadius, 0.01 + j * 2.2 * kRadius, kRadius * 0.9999},
+                    {0, (i % 2 ? 2e-3 : -2e-3), 0}, {}, kRadius, 0);
+  const double h = 0.03;
+  const int k = s.AddMesh(test::Cube(h, 1));
+  MeshMotion mm;
+  mm.pose.position = {0.03, 0.03, 0.09};  // far above the layer
+  s.SetMeshMotion(k, mm);
+  test::StepOk(s, 4000);
+  ASSERT_EQ(s.awake_count(), 0);
+  const std::vector<ContactRecord> before = s.Contacts();
+  int64_t pairs_with_history = 0, walls_with_history = 0;
+  for (const ContactRecord& c : before) (c.b >= 0 ? pairs_with_history : walls_with_history) += 1;
+  ASSERT_GT(pairs_with_history, 0) << "the set-up must leave springs between sleepers";
+  ASSERT_GT(walls_with_history, 0) << "and between sleepers and the floor";
+  const int64_t builds = s.neighbor_stats().builds;
+  // The cube's bottom 4 mm above the centres (inner zone: wake_distance 5 mm), 2.25 mm above the
+  // tops of the spheres.
+  mm.pose.position.z = kRadius + 0.004 + h;
+  s.SetMeshMotion(k, mm);
+  int steps = 0;
+  while (s.awake_count() == 0 && steps < 20) {
+    test::StepOk(s, 1);
+    ++steps;
+  }
+  ASSERT_EQ(s.awake_count(), 100);
+  test::StepOk(s, 1);
+  EXPECT_EQ(s.neighbor_stats().builds, builds);
+  EXPECT_EQ(s.mesh_wrench(k).contacts, 0);
+  const std::vector<ContactRecord> after = s.Contacts();
+  ASSERT_EQ(after.size(), before.size());
+  for (size_t c = 0; c < before.size(); ++c) {
+    EXPECT_EQ(after[c].a, before[c].a);
+    EXPECT_EQ(after[c].b, before[c].b);
+    EXPECT_LE(Norm(after[c].shear - before[c].shear), 1e-12 * Norm(before[c].shear))
+        << "contact " << before[c].a << "-" << before[c].b;
+  }
+}
+
 // Determinism with sleeping and a moving mesh: spheres rained onto a sleeping layer while a cube
 // ploughs through it; 1 and 2 threads give the same hash.
 uint64_t RainHash(int threads) {
