@@ -273,6 +273,11 @@ SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
   std::vector<int32_t> material(n);
   for (size_t k = 0; k < n; ++k) material[k] = p.material[order[k]];
   WriteArray(group.get(), "material", H5T_STD_I32LE, H5T_NATIVE_INT32, material.data(), n, 1);
+  // 1 = integrated, 0 = sleeping (dem::SleepConfig); all 1 when sleeping is off or the state
+  // carries no flags (a state assembled outside dem::System).
+  const bool flagged = p.awake.size() == n;
+  for (size_t k = 0; k < n; ++k) material[k] = !flagged || p.awake[order[k]] != 0;
+  WriteArray(group.get(), "awake", H5T_STD_I32LE, H5T_NATIVE_INT32, material.data(), n, 1);
   return entry;
 }
 
@@ -320,6 +325,7 @@ void WriteXdmf(const std::string& h5_path, const std::vector<SnapshotEntry>& sna
     attribute("speed", "Scalar", n, "Float", 8);
     attribute("id", "Scalar", n, "Int", 8);
     attribute("material", "Scalar", n, "Int", 4);
+    attribute("awake", "Scalar", n, "Int", 4);
     attribute("velocity", "Vector", n + " 3", "Float", 8);
     attribute("angular_velocity", "Vector", n + " 3", "Float", 8);
     x << "      </Grid>\n";

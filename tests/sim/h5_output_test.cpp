@@ -216,6 +216,7 @@ dem::Particles MakeParticles(int n, double seed) {
     p.inv_mass.push_back(1.0);
     p.inv_inertia.push_back(1.0);
     p.material.push_back(static_cast<int32_t>(id % 2));
+    p.awake.push_back(1);
   }
   return p;
 }
@@ -393,7 +394,7 @@ TEST_F(H5Test, SnapshotRoundTripAndXdmfSidecar) {
   EXPECT_EQ(CountOf(xdmf, "<Time Value=\"0\"/>"), 1u);
   EXPECT_EQ(CountOf(xdmf, "<Time Value=\"0.25\"/>"), 1u);
   EXPECT_EQ(CountOf(xdmf, "GeometryType=\"XYZ\""), 2u);
-  for (const char* name : {"radius", "speed", "id", "material"}) {
+  for (const char* name : {"radius", "speed", "id", "material", "awake"}) {
     EXPECT_EQ(CountOf(xdmf, "<Attribute Name=\"" + std::string(name) +
                                 "\" AttributeType=\"Scalar\" Center=\"Node\">"),
               2u)
@@ -408,7 +409,7 @@ TEST_F(H5Test, SnapshotRoundTripAndXdmfSidecar) {
     EXPECT_EQ(item.file, "run.h5");
     EXPECT_EQ(Dims(file.get(), item.dataset), item.dims) << item.dataset;
   }
-  EXPECT_EQ(items, 2u * 8u);  // connectivity, position and six attributes per grid
+  EXPECT_EQ(items, 2u * 9u);  // connectivity, position and seven attributes per grid
 }
 
 // A snapshot of zero particles is legal (empty datasets, NumberOfElements="0").
