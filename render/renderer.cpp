@@ -1,12 +1,5 @@
 #include "render/renderer.h"
 
-// OSMesa exports the whole GL API itself: take the GL prototypes from glext.h and link only
-// libOSMesa (linking libGL as well would route the calls to a library with no current context).
-#define GL_GLEXT_PROTOTYPES 1
-#include <GL/gl.h>
-#include <GL/glext.h>
-#include <GL/osmesa.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -15,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "render/gl_api.h"  // gl.X and osmesa.X: the entry points, loaded at run time
 
 namespace render {
 namespace {
@@ -122,14 +117,14 @@ struct SurfaceVertex {
 };
 
 GLuint Compile(GLenum type, const char* source) {
-  const GLuint shader = glCreateShader(type);
-  glShaderSource(shader, 1, &source, nullptr);
-  glCompileShader(shader);
+  const GLuint shader = gl.CreateShader(type);
+  gl.ShaderSource(shader, 1, &source, nullptr);
+  gl.CompileShader(shader);
   GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
   if (!ok) {
     char log[2048] = {};
-    glGetShaderInfoLog(shader, sizeof(log), nullptr, log);
+    gl.GetShaderInfoLog(shader, sizeof(log), nullptr, log);
     throw std::runtime_error(std::string("render: shader compile failed: ") + log);
   }
   return shader;
@@ -138,17 +133,17 @@ GLuint Compile(GLenum type, const char* source) {
 GLuint Link(const char* vertex, const char* fragment) {
   const GLuint vs = Compile(GL_VERTEX_SHADER, vertex);
   const GLuint fs = Compile(GL_FRAGMENT_SHADER, fragment);
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
+  const GLuint program = gl.CreateProgram();
+  gl.AttachShader(program, vs);
+  gl.AttachShader(program, fs);
+  gl.LinkProgram(program);
+  gl.DeleteShader(vs);
+  gl.DeleteShader(fs);
   GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
   if (!ok) {
     char log[2048] = {};
-    glGetProgramInfoLog(program, sizeof(log), nullptr, log);
+    gl.GetProgramInfoLog(program, sizeof(log), nullptr, log);
     throw std::runtime_error(std::string("render: shader link failed: ") + log);
   }
   return program;
@@ -211,7 +206,7 @@ struct Renderer::Impl {
   void Bind(int width, int height) {
     if (image.width() != width || image.height() != height) image.Resize(width, height);
     if (bound_buffer == image.data() && bound_width == width && bound_height == height) return;
-    if (!OSMesaMakeCurrent(context, image.data(), GL_UNSIGNED_BYTE, width, height)) {
+    if (!osmesa.MakeCurrent(context, image.data(), GL_UNSIGNED_BYTE, width, height)) {
       throw std::runtime_error("render: OSMesaMakeCurrent failed for " + std::to_string(width) +
                                "x" + std::to_string(height));
     }
@@ -223,18 +218,19 @@ struct Renderer::Impl {
   void DrawSurfaces(const std::vector<SurfaceVertex>& vertices, GLenum mode, float r, float g,
                     float b, bool lit) {
     if (vertices.empty()) return;
-    glUseProgram(surface_program);
-    glUniform3f(glGetUniformLocation(surface_program, "color"), r, g, b);
-    glUniform1i(glGetUniformLocation(surface_program, "lit"), lit ? 1 : 0);
-    glBindVertexArray(surface_vao);
-    glBindBuffer(GL_ARRAY_BUFFER, surface_vbo);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(SurfaceVertex)),
-                 vertices.data(), GL_STREAM_DRAW);
-    glDrawArrays(mode, 0, static_cast<GLsizei>(vertices.size()));
+    gl.UseProgram(surface_program);
+    gl.Uniform3f(gl.GetUniformLocation(surface_program, "color"), r, g, b);
+    gl.Uniform1i(gl.GetUniformLocation(surface_program, "lit"), lit ? 1 : 0);
+    gl.BindVertexArray(surface_vao);
+    gl.BindBuffer(GL_ARRAY_BUFFER, surface_vbo);
+    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(SurfaceVertex)),
+                  vertices.data(), GL_STREAM_DRAW);
+    gl.DrawArrays(mode, 0, static_cast<GLsizei>(vertices.size()));
   }
 };
 
 Renderer::Renderer(int threads) : impl_(std::make_unique<Impl>()) {
+  LoadGl();
   if (threads > 0 && std::getenv("LP_NUM_THREADS") == nullptr) {
     setenv("LP_NUM_THREADS", std::to_string(threads).c_str(), 0);
   }
@@ -253,7 +249,7 @@ Renderer::Renderer(int threads) : impl_(std::make_unique<Impl>()) {
                             OSMESA_CONTEXT_MINOR_VERSION,
                             3,
                             0};
-  impl_->context = OSMesaCreateContextAttribs(attributes, nullptr);
+  impl_->context = osmesa.CreateContextAttribs(attributes, nullptr);
   if (impl_->context == nullptr) {
     throw std::runtime_error("render: OSMesa could not create a GL 3.3 core context");
   }
@@ -263,38 +259,37 @@ Renderer::Renderer(int threads) : impl_(std::make_unique<Impl>()) {
   m.sphere_program = Link(kSphereVertex, kSphereFragment);
   m.surface_program = Link(kSurfaceVertex, kSurfaceFragment);
 
-  glGenVertexArrays(1, &m.sphere_vao);
-  glGenBuffers(1, &m.sphere_vbo);
-  glBindVertexArray(m.sphere_vao);
-  glBindBuffer(GL_ARRAY_BUFFER, m.sphere_vbo);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, sizeof(SphereVertex), nullptr);
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(SphereVertex),
-                        reinterpret_cast<const void*>(offsetof(SphereVertex, rgba)));
-
-  glGenVertexArrays(1, &m.surface_vao);
-  glGenBuffers(1, &m.surface_vbo);
-  glBindVertexArray(m.surface_vao);
-  glBindBuffer(GL_ARRAY_BUFFER, m.surface_vbo);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(SurfaceVertex), nullptr);
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(SurfaceVertex),
-                        reinterpret_cast<const void*>(offsetof(SurfaceVertex, nx)));
-  glBindVertexArray(0);
+  // One vertex array and buffer per primitive: attribute 0 is a float vector of `size0`, attribute
+  // 1 a vector of `size1` (`type1`, normalised when integer) at byte `offset1` of each vertex.
+  auto vertex_array = [](GLuint* vao, GLuint* vbo, GLsizei stride, GLint size0, GLint size1,
+                         GLenum type1, size_t offset1) {
+    gl.GenVertexArrays(1, vao);
+    gl.GenBuffers(1, vbo);
+    gl.BindVertexArray(*vao);
+    gl.BindBuffer(GL_ARRAY_BUFFER, *vbo);
+    gl.EnableVertexAttribArray(0);
+    gl.VertexAttribPointer(0, size0, GL_FLOAT, GL_FALSE, stride, nullptr);
+    gl.EnableVertexAttribArray(1);
+    gl.VertexAttribPointer(1, size1, type1, type1 == GL_FLOAT ? GL_FALSE : GL_TRUE, stride,
+                           reinterpret_cast<const void*>(offset1));
+  };
+  vertex_array(&m.sphere_vao, &m.sphere_vbo, sizeof(SphereVertex), 4, 4, GL_UNSIGNED_BYTE,
+               offsetof(SphereVertex, rgba));
+  vertex_array(&m.surface_vao, &m.surface_vbo, sizeof(SurfaceVertex), 3, 3, GL_FLOAT,
+               offsetof(SurfaceVertex, nx));
+  gl.BindVertexArray(0);
 }
 
 Renderer::~Renderer() {
-  if (impl_->context != nullptr) OSMesaDestroyContext(impl_->context);
+  if (impl_->context != nullptr) osmesa.DestroyContext(impl_->context);
 }
 
 size_t Renderer::drawn_particles() const { return impl_->drawn; }
 const Image& Renderer::image() const { return impl_->image; }
 
 std::string Renderer::Description() const {
-  const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+  const auto* renderer = reinterpret_cast<const char*>(gl.GetString(GL_RENDERER));
+  const auto* version = reinterpret_cast<const char*>(gl.GetString(GL_VERSION));
   return std::string(renderer ? renderer : "?") + " (" + (version ? version : "?") + ")";
 }
 
@@ -319,21 +314,21 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
   const float light[3] = {kLightDirection[0] / light_norm, kLightDirection[1] / light_norm,
                           kLightDirection[2] / light_norm};
   for (GLuint program : {m.sphere_program, m.surface_program}) {
-    glUseProgram(program);
-    glUniformMatrix4fv(glGetUniformLocation(program, "view"), 1, GL_FALSE, view_f.data());
-    glUniformMatrix4fv(glGetUniformLocation(program, "proj"), 1, GL_FALSE, proj_f.data());
-    glUniform3fv(glGetUniformLocation(program, "light"), 1, light);
-    glUniform1f(glGetUniformLocation(program, "ambient"), kAmbient);
+    gl.UseProgram(program);
+    gl.UniformMatrix4fv(gl.GetUniformLocation(program, "view"), 1, GL_FALSE, view_f.data());
+    gl.UniformMatrix4fv(gl.GetUniformLocation(program, "proj"), 1, GL_FALSE, proj_f.data());
+    gl.Uniform3fv(gl.GetUniformLocation(program, "light"), 1, light);
+    gl.Uniform1f(gl.GetUniformLocation(program, "ambient"), kAmbient);
   }
 
-  glViewport(0, 0, camera.width, camera.height);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glEnable(GL_PROGRAM_POINT_SIZE);
-  glClearColor(settings.background.r / 255.0f, settings.background.g / 255.0f,
-               settings.background.b / 255.0f, 1.0f);
-  glClearDepth(1.0);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  gl.Viewport(0, 0, camera.width, camera.height);
+  gl.Enable(GL_DEPTH_TEST);
+  gl.DepthFunc(GL_LESS);
+  gl.Enable(GL_PROGRAM_POINT_SIZE);
+  gl.ClearColor(settings.background.r / 255.0f, settings.background.g / 255.0f,
+                settings.background.b / 255.0f, 1.0f);
+  gl.ClearDepth(1.0);
+  gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
 
   // Scenery: the ground around the bed box and the box's twelve edges.
   const dem::Vec3 lo = view.box_min, hi = view.box_max;
@@ -499,30 +494,30 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
                       {To8(c.r), To8(c.g), To8(c.b), 255}};
     }
     m.drawn = drawn;
-    glUseProgram(m.sphere_program);
-    glUniform1f(glGetUniformLocation(m.sphere_program, "pixel_scale"),
-                static_cast<float>(pixel_scale));
-    glUniform2f(glGetUniformLocation(m.sphere_program, "viewport"),
-                static_cast<float>(camera.width), static_cast<float>(camera.height));
-    glUniform2f(glGetUniformLocation(m.sphere_program, "tan_half"), tan_x, tan_y);
-    glUniform1i(glGetUniformLocation(m.sphere_program, "shading"), settings.shading ? 1 : 0);
-    glBindVertexArray(m.sphere_vao);
-    glBindBuffer(GL_ARRAY_BUFFER, m.sphere_vbo);
+    gl.UseProgram(m.sphere_program);
+    gl.Uniform1f(gl.GetUniformLocation(m.sphere_program, "pixel_scale"),
+                 static_cast<float>(pixel_scale));
+    gl.Uniform2f(gl.GetUniformLocation(m.sphere_program, "viewport"),
+                 static_cast<float>(camera.width), static_cast<float>(camera.height));
+    gl.Uniform2f(gl.GetUniformLocation(m.sphere_program, "tan_half"), tan_x, tan_y);
+    gl.Uniform1i(gl.GetUniformLocation(m.sphere_program, "shading"), settings.shading ? 1 : 0);
+    gl.BindVertexArray(m.sphere_vao);
+    gl.BindBuffer(GL_ARRAY_BUFFER, m.sphere_vbo);
     // The buffer grows only: re-allocating it every frame costs page faults.
     const size_t bytes = drawn * sizeof(SphereVertex);
     if (bytes > m.sphere_capacity) {
       m.sphere_capacity = bytes + bytes / 4;
-      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(m.sphere_capacity), nullptr,
-                   GL_STREAM_DRAW);
+      gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(m.sphere_capacity), nullptr,
+                    GL_STREAM_DRAW);
     }
     if (drawn > 0) {
-      glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), m.spheres.data());
-      glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(drawn));
+      gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), m.spheres.data());
+      gl.DrawArrays(GL_POINTS, 0, static_cast<GLsizei>(drawn));
     }
   }
-  glBindVertexArray(0);
-  glFinish();  // the image is in m.image once GL is done
-  const GLenum error = glGetError();
+  gl.BindVertexArray(0);
+  gl.Finish();  // the image is in m.image once GL is done
+  const GLenum error = gl.GetError();
   if (error != GL_NO_ERROR) {
     throw std::runtime_error("render: GL error " + std::to_string(error));
   }
