@@ -73,8 +73,8 @@ struct System::Impl {
                                   // the shear of a pair that did not is stale and reads as zero
   std::vector<Vec3> x_build;      // positions at the last build [m] (N)
   double drift_bound = 0;         // upper bound on any displacement since the last build [m]
-  double asleep_drift = 0;  // largest displacement since the last build of a particle that has
-                            // fallen asleep since (it moves no more) [m]
+  double asleep_drift = 0;  // largest displacement since the last build of the particles asleep
+                            // at the last RefreshActive (they move no more) [m]
   double skin = 0;
   double cutoff_radius = 0;  // largest radius the grid was set up for [m]
   size_t grid_capacity = 0;  // particle count the grid was sized for
@@ -1173,8 +1173,6 @@ void System::UpdateSleep() {
         p_.w[i] = Vec3{};
         m.active_valid = false;
         m.busy_valid = false;
-        if (m.x_build.size() == n)
-          m.asleep_drift = std::max(m.asleep_drift, Norm(p_.x[i] - m.x_build[i]));
       } else {
         ++a;
       }
@@ -1191,8 +1189,18 @@ void System::UpdateSleep() {
 void System::RefreshActive() {
   Impl& m = *impl_;
   m.active.clear();
-  for (size_t i = 0; i < p_.size(); ++i)
-    if (p_.awake[i]) m.active.push_back(static_cast<int32_t>(i));
+  // The rebuild test scans only the active particles: the sleepers' displacement since the build
+  // (frozen while they sleep) is measured here, whoever put them to sleep.
+  const bool built = m.list_valid && m.x_build.size() == p_.size();
+  double asleep2 = 0;
+  for (size_t i = 0; i < p_.size(); ++i) {
+    if (p_.awake[i]) {
+      m.active.push_back(static_cast<int32_t>(i));
+    } else if (built) {
+      asleep2 = std::max(asleep2, Norm2(p_.x[i] - m.x_build[i]));
+    }
+  }
+  m.asleep_drift = std::sqrt(asleep2);
   m.active_valid = true;
   m.awake = static_cast<int64_t>(m.active.size());
 }
