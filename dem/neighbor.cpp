@@ -20,10 +20,12 @@ void NeighborList::SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size
     if (total <= max_cells) break;
     cell *= 1.25;
   }
-  // Cells are ext/cells wide along each axis (>= cell); use one width for all axes: the smallest,
-  // which is still >= cutoff.
+  // Cells are ext/cells wide along each axis (>= cell, except along an axis the particles span
+  // less than one cell: one cell there, narrower); use one width for all axes: the smallest, but
+  // never below `cell`, or a flat layer would get cells narrower than the cutoff and lose pairs.
   double width = ext[0] / cells[0];
   for (int a = 1; a < 3; ++a) width = std::min(width, ext[a] / cells[a]);
+  width = std::max(width, cell);
   inv_cell_ = 1.0 / width;
   // Slab axis: the one with most cells, so that there are many slabs to share between threads.
   int order[3] = {0, 1, 2};

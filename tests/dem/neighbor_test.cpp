@@ -64,6 +64,60 @@ TEST(NeighborTest, HalfListEqualsBruteForce) {
   }
 }
 
+// The list of a cloud sorted and built over its own bounding box, as System::Rebuild does, as a set
+// of pairs of original indices.
+std::set<std::pair<int, int>> BuildPairs(const Cloud& c, double r_max, double skin) {
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const Vec3& x : c.x) {
+    lo = {std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
+    hi = {std::max(hi.x, x.x), std::max(hi.y, x.y), std::max(hi.z, x.z)};
+  }
+  NeighborList list;
+  list.SetupGrid(lo, hi, 2 * r_max + skin, c.x.size());
+  std::vector<int32_t> visit(c.x.size()), perm;
+  for (size_t i = 0; i < visit.size(); ++i) visit[i] = static_cast<int32_t>(i);
+  list.ComputeOrder(c.x.data(), visit, &perm);
+  Cloud s;
+  for (int32_t old : perm) {
+    s.x.push_back(c.x[old]);
+    s.r.push_back(c.r[old]);
+  }
+  list.Build(s.x.data(), s.r.data(), s.x.size(), skin, 2);
+  std::set<std::pair<int, int>> found;
+  for (size_t i = 0; i + 1 < list.start.size(); ++i)
+    for (int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {
+      const int a = perm[i], b = perm[list.partner[k]];
+      found.insert({std::min(a, b), std::max(a, b)});
+    }
+  return found;
+}
+
+std::set<std::pair<int, int>> BrutePairs(const Cloud& c, double skin) {
+  std::set<std::pair<int, int>> expected;
+  for (size_t i = 0; i < c.x.size(); ++i)
+    for (size_t j = i + 1; j < c.x.size(); ++j) {
+      const double reach = c.r[i] + c.r[j] + skin;
+      if (Norm2(c.x[i] - c.x[j]) < reach * reach)
+        expected.insert({static_cast<int>(i), static_cast<int>(j)});
+    }
+  return expected;
+}
+
+// A flat layer (all centres within less than one cutoff in z, as a layer resting on a floor):
+// the cells must still be at least one cutoff wide along x and y.
+TEST(NeighborTest, FlatLayerEqualsBruteForce) {
+  const double r = 1e-3, skin = 2.5e-4;
+  Rng rng(5);
+  Cloud c;
+  for (int i = 0; i < 800; ++i) {
+    c.x.push_back({rng.Uniform(0, 0.04), rng.Uniform(0, 0.04), r + rng.Uniform(0, 0.5 * r)});
+    c.r.push_back(r);
+  }
+  const auto expected = BrutePairs(c, skin);
+  EXPECT_GT(expected.size(), 300u);
+  EXPECT_EQ(BuildPairs(c, r, skin), expected);
+}
+
 // The property the parallel force loop relies on: a pair's partner lies in the owner's slab or the
 // next one.
 TEST(NeighborTest, PartnersLieInOwnOrNextSlab) {
