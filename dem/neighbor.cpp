@@ -80,7 +80,7 @@ void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit
 }
 
 void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double skin,
-                         int num_threads) {
+                         int num_threads, const int32_t* group) {
   const int num_slabs = n_[0];
   slab_partner_.resize(num_slabs);
   slab_count_.resize(num_slabs);
@@ -116,7 +116,9 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
         const int32_t first = (t == 0) ? i + 1 : cell_start_[cell];
         for (int32_t j = first; j < cell_start_[cell + 1]; ++j) {
           const double reach = radius[i] + radius[j] + skin;
-          if (Norm2(x[j] - x[i]) < reach * reach) out.push_back(j);
+          if (Norm2(x[j] - x[i]) < reach * reach &&
+              (group == nullptr || group[i] < 0 || group[i] != group[j]))
+            out.push_back(j);
         }
       }
       cnt.push_back(static_cast<int32_t>(out.size() - before));
