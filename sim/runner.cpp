@@ -52,11 +52,11 @@ int CheckSettled(const Scene& scene, const SettleReport& r, const dem::System& s
     return kExitUnstable;
   }
   if (StopRequested()) return kExitStopped;
-  if (static_cast<int64_t>(system.particles().size()) < scene.bed.count) {
+  if (system.num_bodies() < scene.bed.count) {
     std::fprintf(stderr,
-                 "scoopsim: %s: the box holds only %zu of bed.count = %lld particles; raise "
+                 "scoopsim: %s: the box holds only %lld of bed.count = %lld particles; raise "
                  "box.max or lower bed.count\n",
-                 scene.path.c_str(), system.particles().size(),
+                 scene.path.c_str(), static_cast<long long>(system.num_bodies()),
                  static_cast<long long>(scene.bed.count));
     return kExitNotSettled;
   }
@@ -98,9 +98,10 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   std::fprintf(stderr,
-               "scoopsim: bed of %zu particles, %d layer(s), %.3f s simulated in %.1f s; "
-               "saved %s\n",
-               system->particles().size(), r.layers, r.sim_time, wall, options.output.c_str());
+               "scoopsim: bed of %lld particles (%zu spheres), %d layer(s), %.3f s simulated in "
+               "%.1f s; saved %s\n",
+               static_cast<long long>(system->num_bodies()), system->particles().size(), r.layers,
+               r.sim_time, wall, options.output.c_str());
   return status;
 }
 
