@@ -287,6 +287,36 @@ TEST_F(H5Test, AppendRowRoundTripIsBitIdenticalChunkedAndDeflated) {
   EXPECT_EQ(h5::ReadStringAttribute(root.get(), "status"), "replaced");
 }
 
+// SetGroup puts rows and attributes under a group (a study's one dig per group); "" returns to
+// the root. The same dataset name in two groups is two series.
+TEST_F(H5Test, SetGroupPutsRowsAndAttributesUnderIt) {
+  {
+    H5Output out(Path("study.h5"), "scene", "v");
+    const double one = 1, two = 2;
+    out.SetGroup("tetra4");
+    out.AppendRow("/scoop/time", &one, 1);
+    out.SetAttribute("clumps", 40.0);
+    out.SetGroup("/tetra12/");
+    out.AppendRow("/scoop/time", &two, 1);
+    out.AppendRow("/scoop/time", &two, 1);
+    out.SetStateHash(7);
+    out.SetGroup("");
+    out.AppendRow("/table/x", &one, 1);
+    out.SetAttribute("study", std::string("shape"));
+  }
+  Handle file = OpenFile(Path("study.h5"));
+  EXPECT_EQ(ReadDoubles(file.get(), "/tetra4/scoop/time"), std::vector<double>{1});
+  EXPECT_EQ(ReadDoubles(file.get(), "/tetra12/scoop/time"), (std::vector<double>{2, 2}));
+  EXPECT_EQ(ReadDoubles(file.get(), "/table/x"), std::vector<double>{1});
+  Handle g4(H5Gopen2(file.get(), "/tetra4", H5P_DEFAULT), H5Gclose);
+  EXPECT_EQ(ReadDoubleAttribute(g4.get(), "clumps"), 40.0);
+  Handle g12(H5Gopen2(file.get(), "/tetra12", H5P_DEFAULT), H5Gclose);
+  EXPECT_EQ(h5::ReadStringAttribute(g12.get(), "state_hash"), "0000000000000007");
+  Handle root(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose);
+  EXPECT_EQ(h5::ReadStringAttribute(root.get(), "study"), "shape");
+  EXPECT_EQ(H5Aexists(root.get(), "clumps"), 0);
+}
+
 // A series keeps the width of its first row; another width is a programming error.
 TEST_F(H5Test, AppendRowRejectsAWidthChange) {
   H5Output out(Path("run.h5"), "", "v");
