@@ -173,6 +173,25 @@ health: {max_overlap: 0.1}
   EXPECT_EQ(rod.skin, 0.5e-3);
 }
 
+// The study's ice scenes (tools/make_paper_scenes.py) use the 4-sphere tetrahedron, as the study
+// chose, with as many clumps as hold the solid volume of the bed at a solid fraction of 0.59: the
+// generator's tetra4 volume agrees with dem::ClumpMassProperties (within 1e-4).
+TEST(SceneTest, PaperIceScenesUseTheFourSphereClump) {
+  for (const char* file : {"bed_ice.yaml", "lut_ice_b15.yaml", "lut_ice_b3.yaml"}) {
+    SCOPED_TRACE(file);
+    const Scene scene = LoadScene(kSourceDir + "/scenes/paper/" + file);
+    EXPECT_EQ(scene.bed.clump, "tetra4");
+    EXPECT_EQ(scene.bed.material, "ice");
+    const double solid = 0.59 * 0.62 * 0.22 * 0.15;
+    EXPECT_NEAR(scene.bed.count * scene.bed.clump_volume, solid, 1e-4 * solid);
+    // 3.5 mm spheres: the step of the snow scenes' spheres of the same size.
+    EXPECT_NEAR(scene.time_step, 0.25 * RayleighClosedForm(1.75e-3, 900.0, 1.0e7, 0.36), 1e-15);
+  }
+  const Scene shape = LoadScene(kSourceDir + "/scenes/paper/shape_study.yaml");
+  EXPECT_EQ(shape.bed.clump, "tetra4");
+  EXPECT_TRUE(shape.dig.enabled);
+}
+
 TEST(SceneTest, BedFileIsResolvedAgainstTheScenesFolder) {
   WriteSnowWallMaterials("bedfile_mats.yaml", "[snow, wall]");
   const std::string path = WriteFile("bedfile.yaml", R"(materials: bedfile_mats.yaml
