@@ -560,7 +560,7 @@ const BadCase kBadCases[] = {
      "",
      "",
      {"@.yaml:13: clump_templates.rod.scale: expected one of the keys spheres", "unknown key"}},
-    {"scene_clump_template_not_used_by_name",
+    {"clump_name_typo",
      "  radius: 1.75e-3",
      "  clump: rood",
      "",
