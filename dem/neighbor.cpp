@@ -20,10 +20,12 @@ void NeighborList::SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size
     if (total <= max_cells) break;
     cell *= 1.25;
   }
-  // Cells are ext/cells wide along each axis (>= cell); use one width for all axes: the smallest,
-  // which is still >= cutoff.
+  // Cells are ext/cells wide along each axis (>= cell, except along an axis the particles span
+  // less than one cell: one cell there, narrower); use one width for all axes: the smallest, but
+  // never below `cell`, or a flat layer would get cells narrower than the cutoff and lose pairs.
   double width = ext[0] / cells[0];
   for (int a = 1; a < 3; ++a) width = std::min(width, ext[a] / cells[a]);
+  width = std::max(width, cell);
   inv_cell_ = 1.0 / width;
   // Slab axis: the one with most cells, so that there are many slabs to share between threads.
   int order[3] = {0, 1, 2};
@@ -78,7 +80,7 @@ void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit
 }
 
 void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double skin,
-                         int num_threads) {
+                         int num_threads, const int32_t* group) {
   const int num_slabs = n_[0];
   slab_partner_.resize(num_slabs);
   slab_count_.resize(num_slabs);
@@ -114,7 +116,9 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
         const int32_t first = (t == 0) ? i + 1 : cell_start_[cell];
         for (int32_t j = first; j < cell_start_[cell + 1]; ++j) {
           const double reach = radius[i] + radius[j] + skin;
-          if (Norm2(x[j] - x[i]) < reach * reach) out.push_back(j);
+          if (Norm2(x[j] - x[i]) < reach * reach &&
+              (group == nullptr || group[i] < 0 || group[i] != group[j]))
+            out.push_back(j);
         }
       }
       cnt.push_back(static_cast<int32_t>(out.size() - before));

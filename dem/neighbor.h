@@ -27,8 +27,10 @@ class NeighborList {
   void ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit, std::vector<int32_t>* perm);
 
   // Builds the half list for particles already stored in the order ComputeOrder gave:
-  // pairs (i, j > i) with |x_i - x_j| < r_i + r_j + skin.
-  void Build(const Vec3* x, const double* radius, size_t n, double skin, int num_threads);
+  // pairs (i, j > i) with |x_i - x_j| < r_i + r_j + skin. With `group` (n entries), pairs with
+  // group[i] == group[j] >= 0 are left out (spheres of one rigid clump never touch).
+  void Build(const Vec3* x, const double* radius, size_t n, double skin, int num_threads,
+             const int32_t* group = nullptr);
 
   size_t num_pairs() const { return partner.size(); }
   int num_slabs() const { return static_cast<int>(slab_start.size()) - 1; }

@@ -208,7 +208,8 @@ int64_t System::AddParticle(const Vec3& x, const Vec3& v, const Vec3& w, double 
   return id;
 }
 
-void System::RemoveParticles(const std::vector<int64_t>& ids) {
+void System::RemoveParticles(const std::vector<int64_t>& requested) {
+  const std::vector<int64_t> ids = clumps_.RemoveClumpsOf(requested);  // whole clumps
   if (ids.empty()) return;
   std::vector<char> gone(next_id_, 0);
   for (int64_t id : ids)
@@ -255,6 +256,7 @@ void System::RemoveParticles(const std::vector<int64_t>& ids) {
   impl_->pending = std::move(keep);
   impl_->list_valid = false;
   impl_->needs_rebuild = true;
+  clumps_.Reindex(p_, next_id_);
 }
 
 void System::Touch() { impl_->needs_rebuild = true; }
@@ -378,7 +380,8 @@ void System::Rebuild() {
   // 3. Particle pairs and particle-plane candidates within reach (+ skin).
   // With sleeping, the pairs of two sleepers stay listed (the force pass skips them and keeps
   // their history), so that a particle that wakes needs no rebuild: its pairs are already there.
-  m.list.Build(p_.x.data(), p_.radius.data(), n, m.skin, num_threads_);
+  const int32_t* clump_of = clumps_.Reindex(p_, next_id_);  // no pairs within a clump
+  m.list.Build(p_.x.data(), p_.radius.data(), n, m.skin, num_threads_, clump_of);
   m.shear.assign(m.list.num_pairs(), Vec3{});
   m.touching.assign(m.list.num_pairs(), 0);
   int32_t longest = 0;
@@ -739,6 +742,14 @@ StepStatus System::Step() {
     f[i] = mass[i] * g;
     t[i] = Vec3{};
   }
+  if (!clumps_.empty()) {  // rigid clumps (dem/clump.h): move the bodies, place their spheres
+    const ClumpSet::BeginReport r = clumps_.BeginStep(p_, dt, num_threads_);
+    max_v2 = std::max(max_v2, r.max_member_speed2);
+    if (r.woke) {  // their pairs are listed: only the visiting lists change
+      m.busy_valid = false;
+      m.active_valid = false;
+    }
+  }
   // Rebuild when some particle has moved more than skin/2 since the last build. The sum of
   // dt * max |v| bounds every displacement (triangle inequality); only when that bound passes
   // skin/2 are the true displacements measured, and the bound restarts from the largest one.
@@ -791,11 +802,16 @@ StepStatus System::Step() {
     if (!(std::isfinite(v2) && IsFinite(w[i]))) bad = 1;
     max_v2 = std::max(max_v2, v2);
   }
+  if (!clumps_.empty() && !clumps_.EndStep(p_, g, dt, num_threads_)) bad = 1;  // sum, kick
   time_ += dt;
   ++step_count_;
   if (config_.sleep.enabled && ++m.sleep_counter >= config_.sleep.check_every) {
     m.sleep_counter = 0;
     UpdateSleep();
+    if (!clumps_.empty() && clumps_.SyncSleep(p_, config_.sleep.quiet_checks)) {
+      m.active_valid = false;  // a clump sleeps as a unit
+      m.busy_valid = false;
+    }
   }
 
   StepStatus status;
@@ -1288,15 +1304,18 @@ static void ForEachById(const Particles& p, int64_t next_id, F fn) {
 double System::KineticEnergy() const {
   double e = 0;
   ForEachById(p_, next_id_, [&](size_t i) {
+    if (clumps_.ClumpOf(p_.id[i]) >= 0) return;
     e += 0.5 * p_.mass[i] * Norm2(p_.v[i]) + 0.5 / p_.inv_inertia[i] * Norm2(p_.w[i]);
   });
-  return e;
+  return e + clumps_.KineticEnergy();
 }
 
 double System::PotentialEnergy() const {
   double e = 0;
-  ForEachById(p_, next_id_, [&](size_t i) { e -= p_.mass[i] * Dot(config_.gravity, p_.x[i]); });
-  return e;
+  ForEachById(p_, next_id_, [&](size_t i) {
+    if (clumps_.ClumpOf(p_.id[i]) < 0) e -= p_.mass[i] * Dot(config_.gravity, p_.x[i]);
+  });
+  return e + clumps_.PotentialEnergy(config_.gravity);
 }
 
 double System::ElasticEnergy() const {
@@ -1329,8 +1348,10 @@ double System::ElasticEnergy() const {
 
 Vec3 System::Momentum() const {
   Vec3 pm;
-  ForEachById(p_, next_id_, [&](size_t i) { pm += p_.mass[i] * p_.v[i]; });
-  return pm;
+  ForEachById(p_, next_id_, [&](size_t i) {
+    if (clumps_.ClumpOf(p_.id[i]) < 0) pm += p_.mass[i] * p_.v[i];
+  });
+  return pm + clumps_.Momentum();
 }
 
 uint64_t System::StateHash() const {
@@ -1351,6 +1372,13 @@ uint64_t System::StateHash() const {
     mix(&p_.radius[i], sizeof(double));
     mix(&p_.material[i], sizeof(int32_t));
   });
+  const Clumps& c = clumps_.state();
+  for (size_t k = 0; k < c.size(); ++k) {
+    mix(&c.x[k], sizeof(Vec3));
+    mix(&c.v[k], sizeof(Vec3));
+    mix(&c.q[k], sizeof(Quat));
+    mix(&c.l[k], sizeof(Vec3));
+  }
   mix(&time_, sizeof(double));
   return h;
 }

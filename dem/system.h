@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "dem/clump.h"
 #include "dem/material.h"
 #include "dem/mesh.h"
 #include "dem/vec3.h"
@@ -123,6 +124,7 @@ class System {
   // Adds a sphere; returns its persistent id. Mass and inertia come from the material density.
   int64_t AddParticle(const Vec3& x, const Vec3& v, const Vec3& w, double radius, int material);
   // Removes the particles whose persistent ids are listed (with their contacts).
+  // A clump goes as a whole: naming one of its spheres removes all of them.
   void RemoveParticles(const std::vector<int64_t>& ids);
 
   // Advances one time step (velocity Verlet). Never throws; reports its health.
@@ -154,6 +156,19 @@ class System {
   const MeshMotion& mesh_motion(int k) const;
   MeshWrench mesh_wrench(int k) const;
 
+  // Rigid clumps of spheres (dem/clump.h). A template is prepared once (mass properties,
+  // principal axes); a clump adds one particle per template sphere and moves them as one body.
+  int AddClumpTemplate(const ClumpTemplate& t);  // returns its index (an identical one is reused)
+  int num_clump_templates() const;
+  const ClumpShape& clump_shape(int k) const;
+  // Adds a clump of template `shape` with its template frame at `pose` (the centre of mass lands
+  // at Apply(pose, clump_shape(shape).center_of_mass)), CoM velocity v and angular velocity w
+  // (world); returns its index in clumps() (indices close up when a clump is removed).
+  int64_t AddClump(int shape, const Pose& pose, const Vec3& v, const Vec3& w, int material);
+  const Clumps& clumps() const;
+  Clumps& mutable_clumps();    // to restore a saved state; the spheres are not moved
+  int64_t num_bodies() const;  // single spheres + clumps
+
   // Sleeping (SleepConfig); may be switched on and off between steps.
   void set_sleep(const SleepConfig& sleep);
   int64_t awake_count() const;
@@ -162,12 +177,14 @@ class System {
   std::vector<ContactRecord> Contacts() const;
   void SetContacts(const std::vector<ContactRecord>& contacts);
 
-  // Totals over all particles, summed in persistent-id order.
+  // Totals over all particles, summed in persistent-id order (a clump counts as one rigid body,
+  // after the single spheres, in clump order).
   double KineticEnergy() const;    // translational + rotational [J]
   double PotentialEnergy() const;  // -m g . x [J]
   double ElasticEnergy() const;    // normal Hertz energy 2/5 k delta^(5/2) of current contacts [J]
   Vec3 Momentum() const;           // [kg m/s]
-  // FNV-1a 64 hash of (id, x, v, w, radius, material) in persistent-id order and of the time.
+  // FNV-1a 64 hash of (id, x, v, w, radius, material) in persistent-id order, of the clumps'
+  // (x, v, q, L) and of the time.
   uint64_t StateHash() const;
 
   void set_num_threads(int n) { num_threads_ = n; }
@@ -189,6 +206,7 @@ class System {
   MaterialTable materials_;
   SystemConfig config_;
   Particles p_;
+  ClumpSet clumps_;
   std::vector<Vec3> plane_force_;
   double time_ = 0;
   int64_t step_count_ = 0;

@@ -12,6 +12,7 @@ dem::SystemConfig MakeSystemConfig(const Scene& scene) {
   c.gravity = scene.gravity;
   c.time_step = scene.time_step;
   c.skin = scene.skin;
+  c.max_overlap_fraction = scene.max_overlap;
   const dem::Vec3 lo = scene.box_min, hi = scene.box_max;
   // The grid covers the box and some head room above its open top.
   c.domain_min = lo;
@@ -29,7 +30,7 @@ SettleReport Settle(dem::System* system, double mean_ke, double min_time, double
                     const SettleObserver& observe, int64_t check_every) {
   SettleReport r;
   const double t0 = system->time();
-  const double n = std::max<double>(1.0, static_cast<double>(system->particles().size()));
+  const double n = std::max<double>(1.0, static_cast<double>(system->num_bodies()));
   for (;;) {
     for (int64_t k = 0; k < check_every; ++k) {
       r.status = system->Step();
@@ -50,13 +51,33 @@ SettleReport Settle(dem::System* system, double mean_ke, double min_time, double
   }
 }
 
+namespace {
+
+// A rotation drawn uniformly from SO(3) (Shoemake 1992, "Uniform random rotations", Graphics Gems
+// III): three uniforms, our own RNG, so a seed gives the same bed everywhere.
+dem::Quat UniformRotation(dem::Rng& rng) {
+  const double u1 = rng.Uniform(), u2 = 2.0 * M_PI * rng.Uniform(), u3 = 2.0 * M_PI * rng.Uniform();
+  const double a = std::sqrt(1.0 - u1), b = std::sqrt(u1);
+  return {b * std::cos(u3), a * std::sin(u2), a * std::cos(u2), b * std::sin(u3)};
+}
+
+}  // namespace
+
 SettleReport FillAndSettle(const Scene& scene, dem::System* system, const SettleObserver& observe) {
   SettleReport total;
   const BedSpec& bed = scene.bed;
   const int material = scene.materials.Find(bed.material);
   dem::Rng rng(bed.seed);
   int64_t remaining = bed.count;
-  system->Reserve(static_cast<size_t>(bed.count) + system->particles().size());
+  // Clumps are poured as their bounding spheres (so no two overlap), each turned at random, at a
+  // lattice pitch that gives a solid fraction of clumps of fill_fraction where it can.
+  const bool clumps = !bed.clump.empty();
+  const int shape = clumps ? system->AddClumpTemplate(bed.clump_template) : -1;
+  const double fill =
+      clumps ? bed.fill_fraction * 4.0 / 3.0 * M_PI * std::pow(bed.radius_max, 3) / bed.clump_volume
+             : bed.fill_fraction;
+  const size_t per_body = clumps ? bed.clump_template.radii.size() : 1;
+  system->Reserve(static_cast<size_t>(bed.count) * per_body + system->particles().size());
   while (remaining > 0) {
     // Pour into the free part of the box above the present top of the bed.
     double top = scene.box_min.z;
@@ -65,10 +86,19 @@ SettleReport FillAndSettle(const Scene& scene, dem::System* system, const Settle
     dem::Vec3 lo = scene.box_min, hi = scene.box_max;
     lo.z = top;
     const std::vector<dem::SphereSeed> seeds = dem::InsertSpheres(
-        lo, hi, remaining, bed.radius_min, bed.radius_max, bed.fill_fraction, rng);
+        lo, hi, remaining, clumps ? bed.radius_max : bed.radius_min, bed.radius_max, fill, rng);
     if (seeds.empty()) break;  // box full: the caller reports the shortfall
-    for (const dem::SphereSeed& s : seeds)
-      system->AddParticle(s.x, dem::Vec3{}, dem::Vec3{}, s.radius, material);
+    for (const dem::SphereSeed& s : seeds) {
+      if (!clumps) {
+        system->AddParticle(s.x, dem::Vec3{}, dem::Vec3{}, s.radius, material);
+        continue;
+      }
+      dem::Pose pose;  // of the template frame, with the centre of mass at the seed
+      pose.orientation = UniformRotation(rng);
+      pose.position =
+          s.x - dem::Rotate(pose.orientation, system->clump_shape(shape).center_of_mass);
+      system->AddClump(shape, pose, dem::Vec3{}, dem::Vec3{}, material);
+    }
     remaining -= static_cast<int64_t>(seeds.size());
     ++total.layers;
     // The layer cannot be at rest before its top has had time to fall to its bottom:

@@ -35,6 +35,13 @@ void WriteVectors(hid_t group, const char* name, const std::vector<dem::Vec3>& f
   h5::WriteArray(group, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buffer.data(), order.size(), 3);
 }
 
+// Writes (C x 3) rows of a per-clump field.
+void WriteClumpVectors(hid_t group, const char* name, const std::vector<dem::Vec3>& field) {
+  std::vector<double> buffer;
+  for (const dem::Vec3& a : field) buffer.insert(buffer.end(), {a.x, a.y, a.z});
+  h5::WriteArray(group, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buffer.data(), field.size(), 3);
+}
+
 void WriteStringList(hid_t location, const std::string& name,
                      const std::vector<std::string>& strings) {
   Handle type(CheckId(H5Tcopy(H5T_C_S1), "H5Tcopy"), H5Tclose);
@@ -54,6 +61,47 @@ void WriteStringList(hid_t location, const std::string& name,
     CheckOk(H5Dwrite(dataset.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, pointers.data()),
             "H5Dwrite " + name);
   }
+}
+
+// The clump templates and the clumps' state (see bed_io.h).
+void WriteClumps(hid_t file, const dem::System& system) {
+  std::vector<std::string> names;
+  std::vector<int32_t> counts;
+  std::vector<double> spheres;
+  for (int k = 0; k < system.num_clump_templates(); ++k) {
+    const dem::ClumpTemplate& t = system.clump_shape(k).source;
+    names.push_back(t.name);
+    counts.push_back(static_cast<int32_t>(t.radii.size()));
+    for (size_t s = 0; s < t.radii.size(); ++s)
+      spheres.insert(spheres.end(), {t.centers[s].x, t.centers[s].y, t.centers[s].z, t.radii[s]});
+  }
+  WriteStringList(file, "/clump_templates/names", names);
+  Handle templates(CheckId(H5Gopen2(file, "/clump_templates", H5P_DEFAULT), "H5Gopen2"), H5Gclose);
+  h5::WriteArray(templates.get(), "sphere_count", H5T_STD_I32LE, H5T_NATIVE_INT32, counts.data(),
+                 counts.size(), 1);
+  h5::WriteArray(templates.get(), "spheres", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, spheres.data(),
+                 spheres.size() / 4, 4);
+
+  const dem::Clumps& c = system.clumps();
+  Handle group(CheckId(H5Gcreate2(file, "/clumps", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                       "H5Gcreate2 /clumps"),
+               H5Gclose);
+  const size_t n = c.size();
+  h5::WriteArray(group.get(), "template", H5T_STD_I32LE, H5T_NATIVE_INT32, c.shape.data(), n, 1);
+  h5::WriteArray(group.get(), "material", H5T_STD_I32LE, H5T_NATIVE_INT32, c.material.data(), n, 1);
+  WriteClumpVectors(group.get(), "position", c.x);
+  std::vector<double> q;
+  for (const dem::Quat& o : c.q) q.insert(q.end(), {o.w, o.x, o.y, o.z});
+  h5::WriteArray(group.get(), "orientation", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, q.data(), n, 4);
+  WriteClumpVectors(group.get(), "velocity", c.v);
+  std::vector<dem::Vec3> w(n);
+  for (size_t k = 0; k < n; ++k) w[k] = c.AngularVelocity(k);
+  WriteClumpVectors(group.get(), "angular_velocity", w);
+  WriteClumpVectors(group.get(), "angular_momentum", c.l);
+  WriteClumpVectors(group.get(), "force", c.f);
+  WriteClumpVectors(group.get(), "torque", c.t);
+  h5::WriteArray(group.get(), "member", H5T_STD_I64LE, H5T_NATIVE_INT64, c.member.data(),
+                 c.member.size(), 1);
 }
 
 // Writes everything but the sidecar into a new file at `path`.
@@ -105,8 +153,9 @@ h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& syste
   h5::WriteArray(group.get(), "a", H5T_STD_I64LE, H5T_NATIVE_INT64, a.data(), m, 1);
   h5::WriteArray(group.get(), "b", H5T_STD_I64LE, H5T_NATIVE_INT64, b.data(), m, 1);
   h5::WriteArray(group.get(), "shear", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, shear.data(), m, 3);
-
   group.reset();
+  if (system.clumps().size() > 0) WriteClumps(file.get(), system);
+
   particles.reset();
   root.reset();
   CheckOk(file.reset(), "H5Fclose " + path);
@@ -248,6 +297,98 @@ class BedReader {
   hid_t file_;
 };
 
+// The clumps of a bed file (see bed_io.h), read and checked against its particles.
+struct SavedClumps {
+  std::vector<dem::ClumpTemplate> templates;
+  std::vector<int32_t> shape, material;
+  std::vector<dem::Vec3> x, v, w, l, f, t;
+  std::vector<dem::Quat> q;
+  std::vector<int64_t> member;
+  std::vector<int64_t> first_slot;  // slot (in /particles) of each clump's first sphere
+  std::vector<int32_t> at_slot;     // clump of each particle slot, -1 for a single sphere
+
+  size_t size() const { return shape.size(); }
+  size_t spheres(size_t c) const { return templates[shape[c]].radii.size(); }
+};
+
+SavedClumps ReadClumps(const BedReader& in, const std::vector<int64_t>& ids,
+                       const std::vector<double>& radius, size_t num_materials) {
+  SavedClumps s;
+  if (!in.Exists("/clumps")) return s;
+  const std::vector<std::string> names = in.ReadStrings("/clump_templates/names");
+  const int64_t nt = static_cast<int64_t>(names.size());
+  const std::vector<int32_t> counts =
+      in.Read<int32_t>("/clump_templates/sphere_count", H5T_INTEGER, H5T_NATIVE_INT32, nt, 1);
+  int64_t total = 0;
+  for (int32_t k : counts) {
+    if (k < 1) in.Fail("/clump_templates/sphere_count", "expected counts >= 1");
+    total += k;
+  }
+  const std::vector<double> spheres =
+      in.Read<double>("/clump_templates/spheres", H5T_FLOAT, H5T_NATIVE_DOUBLE, total, 4);
+  size_t at = 0;
+  for (int64_t k = 0; k < nt; ++k) {
+    dem::ClumpTemplate t;
+    t.name = names[k];
+    for (int32_t e = 0; e < counts[k]; ++e, at += 4) {
+      t.centers.push_back({spheres[at], spheres[at + 1], spheres[at + 2]});
+      t.radii.push_back(spheres[at + 3]);
+      if (!(t.radii.back() > 0) || !dem::IsFinite(t.centers.back()))
+        in.Fail("/clump_templates/spheres", "template '" + t.name + "': a radius not > 0");
+    }
+    s.templates.push_back(t);
+  }
+  int64_t n = 0;
+  s.shape = in.Read<int32_t>("/clumps/template", H5T_INTEGER, H5T_NATIVE_INT32, -1, 1, &n);
+  s.material = in.Read<int32_t>("/clumps/material", H5T_INTEGER, H5T_NATIVE_INT32, n, 1);
+  s.x = in.ReadVectors("/clumps/position", n);
+  s.v = in.ReadVectors("/clumps/velocity", n);
+  s.w = in.ReadVectors("/clumps/angular_velocity", n);
+  s.l = in.ReadVectors("/clumps/angular_momentum", n);
+  s.f = in.ReadVectors("/clumps/force", n);
+  s.t = in.ReadVectors("/clumps/torque", n);
+  const std::vector<double> q =
+      in.Read<double>("/clumps/orientation", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 4);
+  for (int64_t c = 0; c < n; ++c) {
+    const dem::Quat o{q[4 * c], q[4 * c + 1], q[4 * c + 2], q[4 * c + 3]};
+    const double norm2 = o.w * o.w + o.x * o.x + o.y * o.y + o.z * o.z;
+    if (!(std::abs(norm2 - 1.0) < 1e-9))
+      in.Fail("/clumps/orientation", "clump " + std::to_string(c) + ": not a unit quaternion");
+    s.q.push_back(o);
+    if (s.shape[c] < 0 || s.shape[c] >= nt)
+      in.Fail("/clumps/template", "clump " + std::to_string(c) + ": template index " +
+                                      std::to_string(s.shape[c]) + " not in /clump_templates");
+    if (s.material[c] < 0 || static_cast<size_t>(s.material[c]) >= num_materials)
+      in.Fail("/clumps/material", "clump " + std::to_string(c) + ": material index " +
+                                      std::to_string(s.material[c]) + " not in /materials/names");
+  }
+  int64_t members = 0;
+  for (int64_t c = 0; c < n; ++c) members += static_cast<int64_t>(s.spheres(c));
+  s.member = in.Read<int64_t>("/clumps/member", H5T_INTEGER, H5T_NATIVE_INT64, members, 1);
+  // A clump's spheres are consecutive particles of the file with the template's radii.
+  s.at_slot.assign(ids.size(), -1);
+  size_t e = 0;
+  for (int64_t c = 0; c < n; ++c) {
+    const dem::ClumpTemplate& t = s.templates[s.shape[c]];
+    const auto first = std::lower_bound(ids.begin(), ids.end(), s.member[e]);
+    const int64_t slot = first - ids.begin();
+    s.first_slot.push_back(slot);
+    for (size_t k = 0; k < t.radii.size(); ++k, ++e) {
+      const size_t at_k = static_cast<size_t>(slot) + k;
+      if (at_k >= ids.size() || ids[at_k] != s.member[e] || s.at_slot[at_k] >= 0 ||
+          radius[at_k] != t.radii[k]) {
+        in.Fail("/clumps/member", "clump " + std::to_string(c) + ": sphere " +
+                                      std::to_string(s.member[e]) +
+                                      " is not the next particle of the bed with radius " +
+                                      std::to_string(t.radii[k]) + " of template '" + t.name +
+                                      "', or belongs to two clumps");
+      }
+      s.at_slot[at_k] = static_cast<int32_t>(c);
+    }
+  }
+  return s;
+}
+
 }  // namespace
 
 void SaveBed(const std::string& path, const dem::System& system, const std::string& scene_yaml) {
@@ -305,6 +446,7 @@ void LoadBed(const std::string& path, dem::System* system) {
       in.Read<int64_t>("/contacts/b", H5T_INTEGER, H5T_NATIVE_INT64, m, 1);
   const std::vector<dem::Vec3> shear = in.ReadVectors("/contacts/shear", m);
   const double time = in.ReadRootDouble("time");
+  const SavedClumps clumps = ReadClumps(in, ids, radius, names.size());
 
   for (int64_t k = 1; k < n; ++k) {
     if (ids[k] <= ids[k - 1]) in.Fail("/particles/id", "ids must be unique and ascending");
@@ -352,20 +494,57 @@ void LoadBed(const std::string& path, dem::System* system) {
     }
   }
 
-  // Particles, in saved id order: a bed loaded into an empty System keeps its ids.
+  for (size_t c = 0; c < clumps.size(); ++c) {
+    if (clumps.material[c] != material[clumps.first_slot[c]])
+      in.Fail("/clumps/material", "clump " + std::to_string(c) + ": not its spheres' material");
+  }
+
+  // Particles, in saved id order: a bed loaded into an empty System keeps its ids. A clump is
+  // added whole at its first sphere (its spheres have consecutive ids).
   system->Reserve(system->particles().size() + static_cast<size_t>(n));
   std::vector<int64_t> new_id(static_cast<size_t>(n));
   std::unordered_map<int64_t, size_t> slot_of_new_id;
+  std::vector<int> shape_of(clumps.templates.size());
+  for (size_t k = 0; k < clumps.templates.size(); ++k)
+    shape_of[k] = system->AddClumpTemplate(clumps.templates[k]);
   for (int64_t k = 0; k < n; ++k) {
-    new_id[k] = system->AddParticle(x[k], v[k], w[k], radius[k], material_of[material[k]]);
-    slot_of_new_id.emplace(new_id[k], static_cast<size_t>(k));
+    const int32_t c = clumps.at_slot.empty() ? -1 : clumps.at_slot[k];
+    if (c < 0) {
+      new_id[k] = system->AddParticle(x[k], v[k], w[k], radius[k], material_of[material[k]]);
+      slot_of_new_id.emplace(new_id[k], static_cast<size_t>(k));
+      continue;
+    }
+    if (clumps.first_slot[c] != k) continue;  // added with its clump
+    // The pose of the template frame from the saved principal frame, then the saved state as is.
+    const int shape = shape_of[clumps.shape[c]];
+    const dem::ClumpShape& cs = system->clump_shape(shape);
+    dem::Pose pose;
+    pose.orientation = clumps.q[c] * dem::Conjugate(cs.principal);
+    pose.position = clumps.x[c] - dem::Rotate(pose.orientation, cs.center_of_mass);
+    const int64_t index =
+        system->AddClump(shape, pose, clumps.v[c], clumps.w[c], material_of[clumps.material[c]]);
+    dem::Clumps& state = system->mutable_clumps();
+    state.x[index] = clumps.x[c];
+    state.v[index] = clumps.v[c];
+    state.q[index] = clumps.q[c];
+    state.l[index] = clumps.l[c];
+    state.f[index] = clumps.f[c];
+    state.t[index] = clumps.t[c];
+    for (size_t e = 0; e < clumps.spheres(c); ++e) {
+      new_id[k + e] = state.member[state.first[index] + e];
+      slot_of_new_id.emplace(new_id[k + e], static_cast<size_t>(k + e));
+    }
   }
-  // The last step's force and torque: velocity Verlet's first half kick uses them, so a restored
-  // bed replays bit for bit.
+  // The saved state of every sphere (a clump's as saved, not as recomputed from its pose) and
+  // the last step's force and torque: velocity Verlet's first half kick uses them, so a
+  // restored bed replays bit for bit.
   dem::Particles& p = system->mutable_particles();
   for (size_t i = 0; i < p.size(); ++i) {
     const auto it = slot_of_new_id.find(p.id[i]);
     if (it == slot_of_new_id.end()) continue;
+    p.x[i] = x[it->second];
+    p.v[i] = v[it->second];
+    p.w[i] = w[it->second];
     p.f[i] = force[it->second];
     p.t[i] = torque[it->second];
   }

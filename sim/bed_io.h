@@ -11,6 +11,17 @@
 //                      which velocity Verlet's first half kick uses
 //   /materials/names   material names (string list, index = material id at save time)
 //   /contacts/         a, b int64 (M), shear (M x 3) [m]: System::Contacts(); b < 0 is plane -1-b
+//   Only when the bed has clumps (dem/clump.h; a sphere bed's file has neither group):
+//   /clump_templates/  names (T strings), sphere_count int32 (T), spheres (S_total x 4): x y z r
+//                      of each template's spheres in its template frame [m], template after
+//                      template
+//   /clumps/           template, material int32 (C): indices into /clump_templates/names and
+//                      /materials/names; position (C x 3): centre of mass [m]; orientation
+//                      (C x 4): w x y z of the principal frame -> world; velocity, angular_velocity
+//                      (world), angular_momentum (principal frame, restored exactly), force,
+//                      torque (the last step's, about the CoM) (C x 3); member int64: the
+//                      persistent ids of each clump's spheres (also in /particles), clump after
+//                      clump, in template order
 //   <name>.xdmf        sidecar next to <name>.h5
 #pragma once
 

@@ -65,16 +65,29 @@ double BedSurface(const dem::Particles& p, const dem::Vec3& lo, const dem::Vec3&
 
 std::vector<int64_t> ParticlesInCavity(const dem::Particles& p, const dem::Pose& pose,
                                        const dem::Vec3& cavity_min, const dem::Vec3& cavity_max,
-                                       double* mass) {
+                                       double* mass, const dem::Clumps* clumps) {
+  auto inside = [&](const dem::Vec3& x) {
+    const dem::Vec3 b = dem::ApplyInverse(pose, x);
+    return b.x >= cavity_min.x && b.x <= cavity_max.x && b.y >= cavity_min.y &&
+           b.y <= cavity_max.y && b.z >= cavity_min.z && b.z <= cavity_max.z;
+  };
   std::vector<int64_t> ids;
+  std::vector<int64_t> members;  // spheres of clumps, sorted: judged with their clump
+  if (clumps) members = clumps->member;
+  std::sort(members.begin(), members.end());
   double m = 0;
   for (size_t i = 0; i < p.size(); ++i) {
-    const dem::Vec3 b = dem::ApplyInverse(pose, p.x[i]);
-    if (b.x >= cavity_min.x && b.x <= cavity_max.x && b.y >= cavity_min.y && b.y <= cavity_max.y &&
-        b.z >= cavity_min.z && b.z <= cavity_max.z) {
+    if (std::binary_search(members.begin(), members.end(), p.id[i])) continue;
+    if (inside(p.x[i])) {
       ids.push_back(p.id[i]);
       m += p.mass[i];
     }
+  }
+  for (size_t c = 0; clumps && c < clumps->size(); ++c) {
+    if (!inside(clumps->x[c])) continue;
+    ids.insert(ids.end(), clumps->member.begin() + clumps->first[c],
+               clumps->member.begin() + clumps->first[c + 1]);
+    m += clumps->mass[c];
   }
   std::sort(ids.begin(), ids.end());
   if (mass) *mass = m;

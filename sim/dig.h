@@ -40,10 +40,11 @@ ScoopWrench ComputeScoopWrench(const dem::MeshWrench& wrench, const dem::Pose& p
 double BedSurface(const dem::Particles& p, const dem::Vec3& lo, const dem::Vec3& hi, double column);
 
 // Persistent ids of the particles whose centres lie inside the box [cavity_min, cavity_max] of
-// the l_scoop frame at `pose`, and their total mass [kg].
+// the l_scoop frame at `pose`, and their total mass [kg]. With `clumps`, a clump counts by its
+// centre of mass: all its spheres or none, and its mass once.
 std::vector<int64_t> ParticlesInCavity(const dem::Particles& p, const dem::Pose& pose,
                                        const dem::Vec3& cavity_min, const dem::Vec3& cavity_max,
-                                       double* mass);
+                                       double* mass, const dem::Clumps* clumps = nullptr);
 
 // Persistent ids of the particles that overlap the mesh at `pose` (centre closer than its radius
 // to a triangle), sorted.

@@ -266,7 +266,7 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
     double mass = 0;
     const std::vector<int64_t> held =
         ParticlesInCavity(system->particles(), system->mesh_motion(k).pose, dig.scoop.cavity_min,
-                          dig.scoop.cavity_max, &mass);
+                          dig.scoop.cavity_max, &mass, &system->clumps());
     system->RemoveParticles(held);
     out->AppendRow("/scoop/collected_mass", &mass, 1);
     summary.collected_mass.push_back(mass);

@@ -375,6 +375,32 @@ struct H5Output::Impl {
   std::chrono::steady_clock::time_point last_flush;
   std::map<std::string, Series, std::less<>> series;  // by absolute dataset path
   std::vector<h5::SnapshotEntry> snapshots;
+  std::string group;     // SetGroup prefix ("" or "/name")
+  h5::Handle group_obj;  // that group, once an attribute was set on it
+
+  // Where attributes go: the SetGroup group (created on first use) or the root.
+  hid_t AttributeTarget() {
+    if (group.empty()) return root.get();
+    if (!group_obj.valid()) {
+      htri_t exists = -1;
+      H5E_BEGIN_TRY { exists = H5Lexists(file.get(), group.c_str(), H5P_DEFAULT); }
+      H5E_END_TRY;
+      if (exists > 0) {
+        group_obj = h5::Handle(
+            h5::CheckId(H5Gopen2(file.get(), group.c_str(), H5P_DEFAULT), "H5Gopen2 " + group),
+            H5Gclose);
+      } else {
+        h5::Handle lcpl(h5::CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
+        h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1),
+                    "H5Pset_create_intermediate_group");
+        group_obj = h5::Handle(
+            h5::CheckId(H5Gcreate2(file.get(), group.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+                        "H5Gcreate2 " + group),
+            H5Gclose);
+      }
+    }
+    return group_obj.get();
+  }
 
   void RequireOpen(const char* what) const {
     if (!file.valid()) throw std::logic_error(std::string("H5Output::") + what + ": file closed");
@@ -474,7 +500,8 @@ void H5Output::AppendRow(const std::string& dataset, const double* values, int w
   Impl& m = *impl_;
   m.RequireOpen("AppendRow");
   if (width < 1) throw std::invalid_argument("H5Output::AppendRow: width must be >= 1");
-  const std::string name = !dataset.empty() && dataset[0] == '/' ? dataset : "/" + dataset;
+  const std::string name =
+      m.group + (!dataset.empty() && dataset[0] == '/' ? dataset : "/" + dataset);
   Series& s = m.GetSeries(name, width);
   s.pending.insert(s.pending.end(), values, values + width);
   // Write when the buffer reaches the next chunk boundary, so whole chunks go out in one piece.
@@ -493,17 +520,27 @@ void H5Output::WriteSnapshot(double time, const dem::Particles& particles) {
 
 void H5Output::SetStateHash(uint64_t hash) {
   impl_->RequireOpen("SetStateHash");
-  h5::WriteStateHash(impl_->root.get(), hash);
+  h5::WriteStateHash(impl_->AttributeTarget(), hash);
 }
 
 void H5Output::SetAttribute(const std::string& name, double value) {
   impl_->RequireOpen("SetAttribute");
-  h5::WriteDoubleAttribute(impl_->root.get(), name, value);
+  h5::WriteDoubleAttribute(impl_->AttributeTarget(), name, value);
 }
 
 void H5Output::SetAttribute(const std::string& name, const std::string& value) {
   impl_->RequireOpen("SetAttribute");
-  h5::WriteStringAttribute(impl_->root.get(), name, value);
+  h5::WriteStringAttribute(impl_->AttributeTarget(), name, value);
+}
+
+void H5Output::SetGroup(const std::string& group) {
+  impl_->RequireOpen("SetGroup");
+  std::string g = group;
+  if (!g.empty() && g[0] != '/') g = "/" + g;
+  while (g.size() > 1 && g.back() == '/') g.pop_back();
+  if (g == "/") g.clear();
+  impl_->group_obj.reset();
+  impl_->group = g;
 }
 
 bool H5Output::MaybeFlush() {
@@ -534,6 +571,7 @@ void H5Output::Close() {
     error = std::current_exception();
   }
   m.series.clear();
+  m.group_obj.reset();
   m.root.reset();
   const herr_t status = m.file.reset();
   if (error) std::rethrow_exception(error);

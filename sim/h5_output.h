@@ -53,6 +53,11 @@ class H5Output {
   void SetAttribute(const std::string& name, double value);
   void SetAttribute(const std::string& name, const std::string& value);
 
+  // Puts what follows under `group` (a study writes one dig per group): AppendRow("/scoop/time")
+  // then writes <group>/scoop/time, and SetAttribute / SetStateHash set attributes of the group
+  // (created as needed) instead of the root. "" returns to the root. Snapshots stay at the root.
+  void SetGroup(const std::string& group);
+
   // Flush() if at least flush_seconds of wall time have passed since the last flush; returns
   // whether it flushed. Cheap enough to call every step.
   bool MaybeFlush();

@@ -52,11 +52,11 @@ int CheckSettled(const Scene& scene, const SettleReport& r, const dem::System& s
     return kExitUnstable;
   }
   if (StopRequested()) return kExitStopped;
-  if (static_cast<int64_t>(system.particles().size()) < scene.bed.count) {
+  if (system.num_bodies() < scene.bed.count) {
     std::fprintf(stderr,
-                 "scoopsim: %s: the box holds only %zu of bed.count = %lld particles; raise "
+                 "scoopsim: %s: the box holds only %lld of bed.count = %lld particles; raise "
                  "box.max or lower bed.count\n",
-                 scene.path.c_str(), system.particles().size(),
+                 scene.path.c_str(), static_cast<long long>(system.num_bodies()),
                  static_cast<long long>(scene.bed.count));
     return kExitNotSettled;
   }
@@ -79,6 +79,14 @@ int PourBed(const Scene& scene, dem::System* system, bool quiet, SettleReport* r
   return status;
 }
 
+// CPU time of the process so far, all threads [s].
+double CpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 double PeakRssMb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -98,9 +106,10 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   std::fprintf(stderr,
-               "scoopsim: bed of %zu particles, %d layer(s), %.3f s simulated in %.1f s; "
-               "saved %s\n",
-               system->particles().size(), r.layers, r.sim_time, wall, options.output.c_str());
+               "scoopsim: bed of %lld particles (%zu spheres), %d layer(s), %.3f s simulated in "
+               "%.1f s; saved %s\n",
+               static_cast<long long>(system->num_bodies()), system->particles().size(), r.layers,
+               r.sim_time, wall, options.output.c_str());
   return status;
 }
 
@@ -201,6 +210,125 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   std::fprintf(stderr, "scoopsim: wrote %s (ParaView: %s)\n", out.path().c_str(),
                out.xdmf_path().c_str());
   return exit_status;
+}
+
+int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
+  namespace fs = std::filesystem;
+  InstallStopHandlers();
+  if (!scene.dig.enabled) throw InputError(scene.path + ": study shape: the scene needs a dig");
+  std::vector<std::string> names =
+      options.templates.empty() ? BuiltinClumpNames() : options.templates;
+  std::vector<dem::ClumpTemplate> templates;
+  for (const std::string& name : names) {
+    const dem::ClumpTemplate* t = dem::FindBuiltinTemplate(name);
+    for (const dem::ClumpTemplate& own : scene.clump_templates)
+      if (own.name == name) t = &own;
+    if (t == nullptr) {
+      std::string known;
+      for (const std::string& k : BuiltinClumpNames()) known += (known.empty() ? "" : ", ") + k;
+      for (const dem::ClumpTemplate& own : scene.clump_templates) known += ", " + own.name;
+      throw InputError("study shape: --templates: expected names among " + known + ", got " + name);
+    }
+    templates.push_back(*t);
+  }
+  if (!scene.bed.file.empty() && !options.quiet)
+    std::fprintf(stderr, "scoopsim: study shape makes a bed per template; bed.file is not used\n");
+
+  H5Output out(options.output, scene.yaml_text, SCOOPSIM_VERSION, scene.output.flush_seconds);
+  std::string list;
+  for (const std::string& name : names) list += (list.empty() ? "" : ",") + name;
+  out.SetAttribute("study", std::string("shape"));
+  out.SetAttribute("templates", list);
+  struct Row {
+    std::string name;
+    double spheres_per_clump, clumps, spheres, time_step, bed_wall, dig_wall, dig_cpu, peak, mean;
+  };
+  std::vector<Row> rows;
+  int status = 0;
+  for (const dem::ClumpTemplate& t : templates) {
+    Scene s = WithClumpBed(scene, t);
+    s.output.snapshot_every = 0;  // the study file holds the wrench, not the particles
+    auto system = MakeSystem(s, options.threads);
+    std::fprintf(stderr,
+                 "scoopsim: study shape: %s, %zu sphere(s) a clump, %lld clumps, dt %.3g s\n",
+                 t.name.c_str(), t.radii.size(), static_cast<long long>(s.bed.count), s.time_step);
+    // The bed: cached in bed_dir when asked, else made.
+    const auto bed0 = std::chrono::steady_clock::now();
+    const std::string bed_path =
+        options.bed_dir.empty() ? "" : (fs::path(options.bed_dir) / (t.name + ".h5")).string();
+    if (!bed_path.empty() && fs::exists(bed_path)) {
+      LoadBed(bed_path, system.get());
+      system->Canonicalize();
+    } else {
+      SettleReport r;
+      status = PourBed(s, system.get(), options.quiet, &r);
+      if (status != 0) break;
+      if (!bed_path.empty()) SaveBed(bed_path, *system, s.yaml_text);
+    }
+    const double bed_wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - bed0).count();
+    // The dig, into the template's group.
+    const double clumps = static_cast<double>(system->clumps().size());
+    const double spheres = static_cast<double>(system->particles().size());
+    out.SetGroup("/" + t.name);
+    DigSummary summary;
+    RunOptions ro;
+    ro.threads = options.threads;
+    ro.quiet = options.quiet;
+    ro.dig_summary = &summary;
+    const auto dig0 = std::chrono::steady_clock::now();
+    const double cpu0 = CpuSeconds();
+    status = RunDig(s, ro, system.get(), &out);
+    const double dig_cpu = CpuSeconds() - cpu0;
+    const double dig_wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - dig0).count();
+    const Row row{t.name,
+                  static_cast<double>(t.radii.size()),
+                  clumps,
+                  spheres,
+                  s.time_step,
+                  bed_wall,
+                  dig_wall,
+                  dig_cpu,
+                  summary.peak_force,
+                  summary.mean_force};
+    out.SetAttribute("spheres_per_clump", row.spheres_per_clump);
+    out.SetAttribute("clumps", clumps);
+    out.SetAttribute("spheres", spheres);
+    out.SetAttribute("time_step", s.time_step);
+    out.SetAttribute("bed_wall_s", bed_wall);
+    out.SetAttribute("dig_wall_s", dig_wall);
+    out.SetAttribute("dig_cpu_s", dig_cpu);
+    out.SetAttribute("steps", static_cast<double>(summary.steps));
+    out.SetAttribute("peak_force", summary.peak_force);
+    out.SetAttribute("mean_force", summary.mean_force);
+    out.SetAttribute("peak_torque", summary.peak_torque);
+    out.SetStateHash(system->StateHash());
+    out.SetGroup("");
+    const double table[9] = {row.spheres_per_clump, clumps,  spheres,  row.time_step, row.bed_wall,
+                             row.dig_wall,          dig_cpu, row.peak, row.mean};
+    const char* columns[9] = {"spheres_per_clump", "clumps",     "spheres",
+                              "time_step",         "bed_wall_s", "dig_wall_s",
+                              "dig_cpu_s",         "peak_force", "mean_force"};
+    for (int k = 0; k < 9; ++k) out.AppendRow(std::string("/table/") + columns[k], &table[k], 1);
+    rows.push_back(row);
+    out.Flush();
+    if (status != 0) break;
+  }
+  out.Close();
+  std::fprintf(
+      stderr,
+      "scoopsim: study shape (wrench in the world frame about the scoop CoM; mean after "
+      "first contact):\n"
+      "| template | spheres/clump | clumps | spheres | dt [s] | bed wall [s] | dig wall [s] "
+      "| dig CPU [s] | peak abs(F) [N] | mean abs(F) [N] |\n"
+      "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  for (const Row& r : rows)
+    std::fprintf(stderr, "| %s | %.0f | %.0f | %.0f | %.3g | %.1f | %.1f | %.1f | %.4g | %.4g |\n",
+                 r.name.c_str(), r.spheres_per_clump, r.clumps, r.spheres, r.time_step, r.bed_wall,
+                 r.dig_wall, r.dig_cpu, r.peak, r.mean);
+  std::fprintf(stderr, "scoopsim: wrote %s\n", options.output.c_str());
+  return status;
 }
 
 int BenchSettle(const BenchSettleOptions& options) {

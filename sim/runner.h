@@ -40,6 +40,31 @@ int MakeBed(const Scene& scene, const RunOptions& options);
 // `scoopsim run SCENE -o OUT.h5`: load (or make) the bed and run for scene.duration.
 int RunScene(const Scene& scene, const RunOptions& options);
 
+// `scoopsim study shape SCENE -o OUT.h5`: the shape-complexity study (paper section 4, Fig. 8,
+// Table 3). The scene's dig is run once per clump template, each on its own bed of that template
+// (sim::WithClumpBed: the same solid volume as the scene's bed, the template's time step), and
+// one HDF5 file holds them all:
+//   /                 attributes scene_yaml, version, study = "shape", templates (comma list)
+//   /<template>/scoop/, /<template>/series/   that dig's rows, as a run's /scoop/ and /series/
+//   /<template>       attributes spheres_per_clump, clumps, spheres, time_step [s], bed_wall_s,
+//                     dig_wall_s (wall-clock), dig_cpu_s (all threads), steps, peak_force,
+//                     mean_force [N] (|F| in the world
+//                     frame; the mean after first contact), peak_torque [N m], state_hash, and the
+//                     dig's own (surface, scoop_mesh, ...)
+//   /table/           one row per template, in order: spheres_per_clump, clumps, spheres,
+//                     time_step, bed_wall_s, dig_wall_s, dig_cpu_s, peak_force, mean_force (n)
+// The table is also printed on stderr. Beds are made (and settled) per template; with bed_dir,
+// DIR/<template>.h5 is loaded when it exists, else made and saved there.
+struct ShapeStudyOptions {
+  int threads = 0;  // 0 = all cores
+  std::string output;
+  bool quiet = false;
+  std::vector<std::string> templates;  // built-in or scene template names; empty = the four
+                                       // tetrahedra of the study (tetra1, tetra4, tetra8, tetra12)
+  std::string bed_dir;
+};
+int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options);
+
 struct BenchSettleOptions {
   int64_t particles = 50000;
   int64_t steps = 2000;

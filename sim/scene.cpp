@@ -547,7 +547,94 @@ RenderSpec ParseRender(const std::string& path, const YAML::Node& node) {
   return spec;
 }
 
+// `clump_templates:` a map of name -> {spheres: [[x, y, z, r], ...]} (m, template frame).
+std::vector<dem::ClumpTemplate> ParseClumpTemplates(const std::string& file,
+                                                    const YAML::Node& node) {
+  const std::string expected = "a map of template name -> {spheres: [[x, y, z, r], ...]} (m)";
+  if (!node.IsMap() || node.size() == 0)
+    Fail(file, LineOf(node), "clump_templates", "a non-empty " + expected, Describe(node));
+  std::vector<dem::ClumpTemplate> out;
+  for (auto it = node.begin(); it != node.end(); ++it) {
+    const YAML::Node name_node = it->first;
+    const std::string name = name_node.IsScalar() ? name_node.Scalar() : "";
+    if (name.empty())
+      Fail(file, LineOf(name_node), "clump_templates", expected, Describe(name_node));
+    const std::string path = "clump_templates." + name;
+    if (dem::FindBuiltinTemplate(name) != nullptr) {
+      Fail(file, LineOf(name_node), path,
+           "a name other than the built-in " + Join(BuiltinClumpNames()), "'" + name + "'");
+    }
+    for (const dem::ClumpTemplate& t : out)
+      if (t.name == name)
+        Fail(file, LineOf(name_node), path, "each template name once", "a second '" + name + "'");
+    const MapReader m(file, it->second, path, {"spheres", "notes"});
+    const std::string sphere_expected =
+        "a list of spheres [x, y, z, r]: centre in the template frame and radius r > 0 (m)";
+    const YAML::Node spheres = m.Need("spheres", sphere_expected);
+    if (!spheres.IsSequence() || spheres.size() == 0)
+      Fail(file, LineOf(spheres), path + ".spheres", sphere_expected, Describe(spheres));
+    dem::ClumpTemplate t;
+    t.name = name;
+    for (size_t k = 0; k < spheres.size(); ++k) {
+      const YAML::Node sp = spheres[k];
+      const std::string key = path + ".spheres[" + std::to_string(k) + "]";
+      const std::string one = "[x, y, z, r] with r > 0 (m)";
+      if (!sp.IsSequence() || sp.size() != 4) Fail(file, LineOf(sp), key, one, Describe(sp));
+      double c[4];
+      for (int i = 0; i < 4; ++i)
+        c[i] = m.CheckNumber(
+            sp[i], key, one, [i](double v) { return i < 3 || v > 0; }, &sp);
+      t.centers.push_back({c[0], c[1], c[2]});
+      t.radii.push_back(c[3]);
+    }
+    out.push_back(t);
+  }
+  return out;
+}
+
+// The time step (paper eq. 4: a fraction of the Rayleigh time of the smallest sphere, a clump's
+// smallest sphere included) and the default skin, from the bed.
+void DeriveFromBed(Scene* scene) {
+  const BedSpec& bed = scene->bed;
+  if (!scene->skin_given) {
+    double largest = bed.radius_min;
+    for (double r : bed.clump_template.radii) largest = std::max(largest, r);
+    scene->skin = 0.5 * (bed.clump.empty() ? bed.radius_min : largest);
+  }
+  const dem::Material& material = scene->materials[scene->materials.Find(bed.material)];
+  scene->time_step = scene->rayleigh_fraction * dem::RayleighTimeStep(bed.radius_min, material);
+}
+
+// Sets the bed's clump template and the radii it implies (smallest sphere, bounding radius).
+void SetBedClump(BedSpec* bed, const dem::ClumpTemplate& t) {
+  const dem::ClumpShape shape = dem::MakeClumpShape(t);
+  bed->clump = t.name;
+  bed->clump_template = t;
+  bed->clump_volume = shape.volume;
+  bed->radius_min = shape.min_radius;
+  bed->radius_max = shape.bounding_radius;
+}
+
 }  // namespace
+
+std::vector<std::string> BuiltinClumpNames() {
+  std::vector<std::string> names;
+  for (const dem::ClumpTemplate& t : dem::TetrahedronTemplates()) names.push_back(t.name);
+  return names;
+}
+
+Scene WithClumpBed(const Scene& scene, const dem::ClumpTemplate& t) {
+  Scene out = scene;
+  const BedSpec& bed = scene.bed;
+  const double volume =
+      bed.clump.empty() ? MeanSphereVolume(bed.radius_min, bed.radius_max) : bed.clump_volume;
+  SetBedClump(&out.bed, t);
+  out.bed.count = std::max<int64_t>(
+      1, std::llround(static_cast<double>(bed.count) * volume / out.bed.clump_volume));
+  out.bed.file.clear();
+  DeriveFromBed(&out);
+  return out;
+}
 
 void LoadMaterials(const std::string& path, dem::MaterialTable* table) {
   std::string text;
@@ -561,9 +648,10 @@ Scene LoadScene(const std::string& path) {
   if (!ReadFile(path, &scene.yaml_text)) throw InputError(path + ": cannot open scene file");
   const YAML::Node root = Parse(path, scene.yaml_text);
   if (root.IsNull()) Fail(path, 1, "(top level)", "a map of scene keys", "an empty file");
-  const MapReader top(path, root, "",
-                      {"materials", "gravity", "time_step", "neighbor", "box", "bed", "duration",
-                       "output", "threads", "dig", "sleep", "render", "notes"});
+  const MapReader top(
+      path, root, "",
+      {"materials", "gravity", "time_step", "neighbor", "box", "bed", "duration", "output",
+       "threads", "dig", "sleep", "render", "clump_templates", "health", "notes"});
 
   // Materials file, relative to the scene's folder.
   const std::string materials_expected = "the path of a readable materials file";
@@ -596,13 +684,33 @@ Scene LoadScene(const std::string& path) {
     scene.rayleigh_fraction = v;
   }
 
-  // Bed: what to fill the box with.
+  // Clump templates of the scene (besides the built-in ones).
+  if (top.Has("clump_templates"))
+    scene.clump_templates = ParseClumpTemplates(path, root["clump_templates"]);
+
+  // Bed: what to fill the box with: spheres (bed.radius) or clumps of a template (bed.clump).
   const YAML::Node bed_node = top.Need("bed", "a map with keys material, radius, count");
-  const MapReader bed(path, bed_node, "bed",
-                      {"material", "radius", "count", "seed", "fill_fraction", "settle", "file"});
+  const MapReader bed(
+      path, bed_node, "bed",
+      {"material", "radius", "count", "clump", "seed", "fill_fraction", "settle", "file"});
   BedSpec& spec = scene.bed;
   spec.material = bed.String("material", "a material name");
-  {
+  if (bed.Has("clump")) {
+    std::vector<std::string> names = BuiltinClumpNames();
+    for (const dem::ClumpTemplate& t : scene.clump_templates) names.push_back(t.name);
+    const std::string expected = "a clump template (" + Join(names) + ")";
+    const std::string name = bed.String("clump", expected);
+    const dem::ClumpTemplate* t = dem::FindBuiltinTemplate(name);
+    for (const dem::ClumpTemplate& own : scene.clump_templates)
+      if (own.name == name) t = &own;
+    if (t == nullptr) Fail(path, LineOf(bed_node["clump"]), "bed.clump", expected, name);
+    if (bed.Has("radius")) {
+      Fail(path, LineOf(bed_node["radius"]), "bed.radius",
+           "no bed.radius with bed.clump (the template sets the spheres)",
+           Describe(bed_node["radius"]));
+    }
+    SetBedClump(&spec, *t);
+  } else {
     const std::string expected = "a number > 0 or a range [rmin, rmax] with 0 < rmin <= rmax (m)";
     const YAML::Node r = bed.Need("radius", expected);
     if (r.IsSequence()) {
@@ -684,14 +792,18 @@ Scene LoadScene(const std::string& path) {
   // (dem/insertion.h), so the box must hold one lattice cell in every direction and the settled
   // bed, at a solid fraction of about 0.59, must lie below the box's top.
   constexpr double kSettledSolidFraction = 0.59;
+  // Clumps are poured as their bounding spheres at a solid fraction of clumps of fill_fraction
+  // (sim/bed.cpp): the same pitch with the clump's volume and bounding radius.
   const dem::Vec3 extent = scene.box_max - scene.box_min;
-  const double mean_volume = MeanSphereVolume(spec.radius_min, spec.radius_max);
+  const bool clumps = !spec.clump.empty();
+  const double mean_volume =
+      clumps ? spec.clump_volume : MeanSphereVolume(spec.radius_min, spec.radius_max);
   const double pitch =
       std::max(std::cbrt(mean_volume / spec.fill_fraction), 2.0 * spec.radius_max * (1.0 + 1e-9));
   if (std::min({extent.x, extent.y, extent.z}) < pitch) {
     Fail(path, LineOf(box_node["max"]), "box.max",
-         "a box at least " + Num(pitch) +
-             " m along x, y and z (one insertion cell for bed.radius at bed.fill_fraction)",
+         "a box at least " + Num(pitch) + " m along x, y and z (one insertion cell for " +
+             (clumps ? "bed.clump" : "bed.radius") + " at bed.fill_fraction)",
          "a box of " + Num(extent.x) + " x " + Num(extent.y) + " x " + Num(extent.z) + " m");
   }
   const double floor_area = extent.x * extent.y;
@@ -701,17 +813,17 @@ Scene LoadScene(const std::string& path) {
     const double max_count =
         std::floor(kSettledSolidFraction * floor_area * extent.z / mean_volume);
     Fail(path, LineOf(bed_node["count"]), "bed.count",
-         "a bed that fits the box: at most " + Int(max_count) + " spheres settle below its " +
-             Num(extent.z) + " m height at a solid fraction of ~0.59",
+         "a bed that fits the box: at most " + Int(max_count) + (clumps ? " clumps" : " spheres") +
+             " settle below its " + Num(extent.z) + " m height at a solid fraction of ~0.59",
          std::to_string(spec.count),
          "the settled bed would be " + Num(settled_height) +
              " m high; raise box.max z or lower bed.count");
   }
 
-  // Neighbour search skin; default a quarter of the smallest diameter.
-  scene.skin = 0.5 * spec.radius_min;
+  // Neighbour search skin; default a quarter of the smallest diameter (DeriveFromBed).
   if (top.Has("neighbor")) {
     const MapReader neighbor(path, root["neighbor"], "neighbor", {"skin"});
+    scene.skin_given = neighbor.Has("skin");
     scene.skin = neighbor.Number("skin", scene.skin, "a number > 0 (m)", Positive);
   }
 
@@ -733,12 +845,19 @@ Scene LoadScene(const std::string& path) {
 
   if (top.Has("dig")) ParseDig(path, root["dig"], bed_material, &scene);
   if (top.Has("sleep")) ParseSleep(path, root["sleep"], &scene.sleep);
+  if (top.Has("health")) {
+    // The overlap that stops a run as unstable. A clump's small spheres carry the whole clump's
+    // mass into their contacts, so they overlap more than a free sphere of their size would.
+    const MapReader health(path, root["health"], "health", {"max_overlap"});
+    scene.max_overlap = health.Number("max_overlap", scene.max_overlap,
+                                      "a number in (0, 0.5] (overlap / smaller diameter)",
+                                      [](double v) { return v > 0 && v <= 0.5; });
+  }
   // Frames (render/): camera, colouring, size, period.
   if (top.Has("render")) scene.render = ParseRender(path, root["render"]);
 
-  // Derived time step: a fraction of the Rayleigh time of the smallest sphere (paper eq. 4).
-  scene.time_step = scene.rayleigh_fraction *
-                    dem::RayleighTimeStep(spec.radius_min, scene.materials[bed_material]);
+  // Derived time step and default skin.
+  DeriveFromBed(&scene);
   return scene;
 }
 

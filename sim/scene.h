@@ -5,7 +5,9 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
+#include "dem/clump.h"
 #include "dem/material.h"
 #include "dem/system.h"
 #include "dem/vec3.h"
@@ -22,16 +24,21 @@ class InputError : public std::runtime_error {
 
 // How the bed is made (fill + settle) or where a saved one is loaded from.
 struct BedSpec {
-  std::string material;          // particle material name (key bed.material)
-  double radius_min = 0;         // [m] radii are uniform in [radius_min, radius_max]
-  double radius_max = 0;         // [m] (bed.radius: r sets both; bed.radius: [a, b] a range)
-  int64_t count = 0;             // number of particles
-  uint64_t seed = 1;             // insertion RNG seed
-  double fill_fraction = 0.35;   // solid fraction of the random insertion layers [-]
-  double settle_ke = 1e-9;       // settled when mean kinetic energy per particle < this [J]
-  double settle_max_time = 5.0;  // give up settling after this simulated time [s]
-  std::string file;              // saved bed to load instead of making one (path as written,
-                                 // resolved against the scene's folder); "" = make one
+  std::string material;               // particle material name (key bed.material)
+  double radius_min = 0;              // [m] radii are uniform in [radius_min, radius_max]
+  double radius_max = 0;              // [m] (bed.radius: r sets both; bed.radius: [a, b] a range);
+                                      // clumps: their smallest sphere and their bounding radius
+  int64_t count = 0;                  // number of particles (spheres, or clumps with bed.clump)
+  std::string clump;                  // bed.clump: a template name; the bed is made of these rigid
+                                      // clumps (dem/clump.h) instead of spheres; "" = spheres
+  dem::ClumpTemplate clump_template;  // that template (built in, or from clump_templates)
+  double clump_volume = 0;            // [m^3] of one clump (the union of its spheres)
+  uint64_t seed = 1;                  // insertion RNG seed
+  double fill_fraction = 0.35;        // solid fraction of the random insertion layers [-]
+  double settle_ke = 1e-9;            // settled when mean kinetic energy per particle < this [J]
+  double settle_max_time = 5.0;       // give up settling after this simulated time [s]
+  std::string file;                   // saved bed to load instead of making one (path as written,
+                                      // resolved against the scene's folder); "" = make one
 };
 
 struct OutputSpec {
@@ -95,7 +102,9 @@ struct Scene {
   dem::Vec3 gravity{0, 0, -9.81};  // [m/s^2]
   double rayleigh_fraction = 0.2;  // dt / t_R, in (0, 0.3]
   double time_step = 0;            // [s] derived: rayleigh_fraction * t_R(smallest radius)
-  double skin = 0;                 // Verlet skin [m]; default 0.25 * smallest diameter
+  double skin = 0;                 // Verlet skin [m]; default 0.25 * smallest diameter (clumps:
+                                   // 0.25 * the template's largest sphere diameter)
+  bool skin_given = false;         // neighbor.skin was set (else the default above)
   dem::Vec3 box_min, box_max;      // container [m]: floor and four side walls, open top
   std::string wall_material;       // material of the container walls
   BedSpec bed;
@@ -103,12 +112,24 @@ struct Scene {
   OutputSpec output;
   int threads = 0;  // 0 = all cores (CLI --threads overrides)
   DigSpec dig;
-  dem::SleepConfig sleep;  // used while digging (never while settling)
+  dem::SleepConfig sleep;     // used while digging (never while settling)
+  double max_overlap = 0.05;  // health.max_overlap: overlap / smaller diameter that stops a run
+                              // (dem::SystemConfig::max_overlap_fraction)
+  std::vector<dem::ClumpTemplate> clump_templates;  // the scene's own (key clump_templates)
   RenderSpec render;
 };
 
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.
 Scene LoadScene(const std::string& path);
+
+// The built-in clump templates' names (dem::TetrahedronTemplates), in order.
+std::vector<std::string> BuiltinClumpNames();
+
+// `scene` with its bed made of clumps of `t` (the shape study): bed.clump and the quantities
+// derived from the bed (radii, time step, default skin) as LoadScene derives them, and bed.count
+// set so that the bed holds the same solid volume as the scene's (so it settles to the same
+// height); bed.file is cleared.
+Scene WithClumpBed(const Scene& scene, const dem::ClumpTemplate& t);
 
 // The `render:` block of a scene's text (for a saved run's stored scene); defaults when it has
 // none. `name` stands for the file in messages. Throws InputError like LoadScene.

@@ -5,6 +5,7 @@
 //   scoopsim run SCENE --frames DIR [--every S] [--video]   PNG frames while running (render/)
 //   scoopsim render OUT.h5 --frames DIR [--video] [--color-by F] [--camera PRESET]
 //   scoopsim bench render --particles N --frames F [--threads T]
+//   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
 // Exit status: 0 success, 1 runtime failure, 2 bad input (scene, materials file or command line);
 // the commands' own statuses pass through (sim/runner.cpp: 3 unstable, 4 not settled, 130 stopped).
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
@@ -169,6 +170,24 @@ int Main(int argc, char** argv) {
       ->check(CLI::Range(0, kMaxThreads));
   render_cmd->add_flag("-q,--quiet", render_quiet, "No progress output");
 
+  CLI::App* study = app.add_subcommand("study", "Studies of the reference paper");
+  study->require_subcommand(1);
+  SceneCommand shape_args;
+  CLI::App* shape = study->add_subcommand(
+      "shape",
+      "Shape-complexity study (paper Table 3, Fig. 8): the scene's dig on a bed of each clump "
+      "template; wrench and wall time per template in one HDF5 file");
+  shape_args.AddTo(shape, "out/shape_study.h5");
+  std::vector<std::string> shape_templates;
+  std::string shape_beds;
+  shape
+      ->add_option("--templates", shape_templates,
+                   "Clump templates, comma separated (default: tetra1,tetra4,tetra8,tetra12)")
+      ->delimiter(',');
+  shape->add_option("--beds", shape_beds,
+                    "Folder of the beds: DIR/<template>.h5 is loaded if present, else made and "
+                    "saved there");
+
   CLI::App* bench = app.add_subcommand("bench", "Benchmarks");
   bench->require_subcommand(1);
   CLI::App* settle =
@@ -256,6 +275,18 @@ int Main(int argc, char** argv) {
       std::fprintf(stderr, "scoopsim: %d frames in %s\n", count, render_frames.dir.c_str());
       render_frames.MaybeVideo();
       return 0;
+    }
+    if (*shape) {
+      const sim::Scene scene = sim::LoadScene(shape_args.scene);
+      MakeParentDirectories(shape_args.output);
+      const sim::RunOptions run = shape_args.Options(scene);
+      sim::ShapeStudyOptions options;
+      options.threads = run.threads;
+      options.output = run.output;
+      options.quiet = run.quiet;
+      options.templates = shape_templates;
+      options.bed_dir = shape_beds;
+      return sim::RunShapeStudy(scene, options);
     }
     if (*settle) return sim::BenchSettle(bench_options);
     if (*bench_render) return render::BenchRender(render_bench);

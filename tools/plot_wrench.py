@@ -2,7 +2,7 @@
 """Plots the wrench on the scoop against rho, the way the paper's figures do.
 
     tools/plot_wrench.py RUN.h5 [RUN2.h5 ...] -o PLOT.png [--frame body|scoop|world]
-                         [--pass N] [--smooth W] [--labels A,B,...] [--title TEXT]
+                         [--pass N] [--smooth W] [--labels A,B,...] [--title TEXT] [--force-only]
 
 Reads the scoop time series of scoopsim run files (SI units):
   /scoop/time (n) [s], /scoop/pass (n), /scoop/rho (n) [m],
@@ -13,6 +13,10 @@ paper's Fig. 1 frame) below, against rho in mm (0..450 like the paper). Each ser
 (thin, light) and smoothed by a centred moving average over --smooth samples (odd; 1 = none).
 One line per run and pass: all passes, or only pass N with --pass N. Legend: the file stem, or
 --labels.
+
+A shape-study file (scoopsim study shape: one group per clump template, each with a run's /scoop
+datasets) counts as one run per template, in the study's order, labelled with the template and
+its sphere count. --force-only draws |F| alone against rho, one line per run (the paper's Fig. 8).
 
 Exit status: 0 written; 2 bad input (a missing file or dataset, an empty selection), one line on
 stderr. Needs python3-numpy, python3-h5py and python3-matplotlib (tools/install-deps.sh).
@@ -46,22 +50,40 @@ def open_run(path):
         raise InputError("%s: cannot open as HDF5 (%s)" % (path, e))
 
 
-def read_run(path, frame):
-    """Dict of numpy arrays: time, pass (int), rho, force, torque, collected_mass (or None)."""
+def read_runs(path, frame):
+    """[(label, run)]: the file's own run, or one per template group of a shape-study file."""
     with open_run(path) as f:
-        names = list(REQUIRED) + ["force_" + frame, "torque_" + frame]
-        for name in names:
-            if "scoop/" + name not in f:
-                raise InputError("%s: missing dataset /scoop/%s (expected a scoopsim run file "
-                                 "with the scoop time series)" % (path, name))
-        run = {name: np.asarray(f["scoop/" + name][()], dtype=float) for name in names}
-        mass = f["scoop/collected_mass"][()] if "scoop/collected_mass" in f else None
+        if "scoop" in f or f.attrs.get("study") != "shape":
+            return [(os.path.splitext(os.path.basename(path))[0], read_run(f, path, frame, ""))]
+        groups = str(f.attrs.get("templates", "")).split(",")
+        out = []
+        for g in [g for g in groups if g]:
+            if g not in f:
+                raise InputError("%s: the study names template %s but has no group /%s"
+                                 % (path, g, g))
+            spheres = int(f[g].attrs.get("spheres_per_clump", 0))
+            label = "%s (%d sphere%s)" % (g, spheres, "" if spheres == 1 else "s")
+            out.append((label, read_run(f, path, frame, "/" + g)))
+        return out
+
+
+def read_run(f, path, frame, group):
+    """Dict of numpy arrays: time, pass (int), rho, force, torque, collected_mass (or None), from
+    the /scoop datasets under `group` ("" for a run file)."""
+    scoop = group + "/scoop/"
+    names = list(REQUIRED) + ["force_" + frame, "torque_" + frame]
+    for name in names:
+        if scoop + name not in f:
+            raise InputError("%s: missing dataset %s%s (expected a scoopsim run file "
+                             "with the scoop time series)" % (path, scoop, name))
+    run = {name: np.asarray(f[scoop + name][()], dtype=float) for name in names}
+    mass = f[scoop + "collected_mass"][()] if scoop + "collected_mass" in f else None
     n = run["time"].shape[0]
     for name in names:
         want = (n, 3) if name.startswith(("force", "torque")) else (n,)
         if run[name].shape != want:
-            raise InputError("%s: /scoop/%s has shape %s, expected %s"
-                             % (path, name, run[name].shape, want))
+            raise InputError("%s: %s%s has shape %s, expected %s"
+                             % (path, scoop, name, run[name].shape, want))
     return {
         "time": run["time"],
         "pass": np.rint(run["pass"]).astype(int),
@@ -103,26 +125,33 @@ def series(runs, labels, pass_filter):
     return out
 
 
-def plot(lines, frame, window, title, out_path):
+def plot(lines, frame, window, title, out_path, force_only=False):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig = plt.figure(figsize=(13, 9), constrained_layout=True)
-    grid = fig.add_gridspec(3, 6)
-    panels = [
-        (fig.add_subplot(grid[0, 0:3]), "|F| [N]", lambda f, t: np.linalg.norm(f, axis=1)),
-        (fig.add_subplot(grid[0, 3:6]), "|T| [N m]", lambda f, t: np.linalg.norm(t, axis=1)),
-    ]
-    for i, axis in enumerate("xyz"):
-        panels.append((fig.add_subplot(grid[1, 2 * i:2 * i + 2]), "F%s [N]" % axis,
-                       lambda f, t, i=i: f[:, i]))
-    for i, axis in enumerate("xyz"):
-        panels.append((fig.add_subplot(grid[2, 2 * i:2 * i + 2]), "T%s [N m]" % axis,
-                       lambda f, t, i=i: t[:, i]))
+    magnitude = (lambda f, t: np.linalg.norm(f, axis=1))
+    if force_only:  # the paper's Fig. 8: |F| of each run against rho
+        fig = plt.figure(figsize=(9, 5.5), constrained_layout=True)
+        panels = [(fig.add_subplot(1, 1, 1), "|F| [N]", magnitude)]
+    else:
+        fig = plt.figure(figsize=(13, 9), constrained_layout=True)
+        grid = fig.add_gridspec(3, 6)
+        panels = [
+            (fig.add_subplot(grid[0, 0:3]), "|F| [N]", magnitude),
+            (fig.add_subplot(grid[0, 3:6]), "|T| [N m]", lambda f, t: np.linalg.norm(t, axis=1)),
+        ]
+        for i, axis in enumerate("xyz"):
+            panels.append((fig.add_subplot(grid[1, 2 * i:2 * i + 2]), "F%s [N]" % axis,
+                           lambda f, t, i=i: f[:, i]))
+        for i, axis in enumerate("xyz"):
+            panels.append((fig.add_subplot(grid[2, 2 * i:2 * i + 2]), "T%s [N m]" % axis,
+                           lambda f, t, i=i: t[:, i]))
 
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    rho_max = max([450.0] + [float(np.nanmax(r)) for _, r, _, _ in lines if r.size])
+    # The paper's rho axis runs to 450 mm; a short dig (a study on a small bed) keeps its own.
+    rho_seen = max([0.0] + [float(np.nanmax(r)) for _, r, _, _ in lines if r.size])
+    rho_max = 450.0 if rho_seen > 100.0 else max(rho_seen, 1.0)
     for ax, ylabel, value in panels:
         for k, (label, rho, force, torque) in enumerate(lines):
             colour = colours[k % len(colours)]
@@ -134,8 +163,10 @@ def plot(lines, frame, window, title, out_path):
         ax.set_ylabel(ylabel)
         ax.grid(True, linewidth=0.3)
     panels[0][0].legend(fontsize="small")
-    fig.suptitle(title or "Wrench on the scoop, %s frame (raw and %d-sample moving average)"
-                 % (frame, window))
+    default = ("Force magnitude on the scoop (raw and %d-sample moving average)" % window
+               if force_only else
+               "Wrench on the scoop, %s frame (raw and %d-sample moving average)" % (frame, window))
+    fig.suptitle(title or default)
     fig.savefig(out_path, dpi=110)
     plt.close(fig)
 
@@ -154,26 +185,28 @@ def main(argv=None):
     parser.add_argument("--labels", help="comma-separated legend labels, one per run "
                         "(default: file stems)")
     parser.add_argument("--title", help="figure title")
+    parser.add_argument("--force-only", action="store_true",
+                        help="draw |F| alone, one line per run (a shape study: per template)")
     args = parser.parse_args(argv)
 
     try:
         if args.smooth < 1:
             raise InputError("--smooth: expected a window >= 1 sample, got %d" % args.smooth)
         window = args.smooth if args.smooth % 2 == 1 else args.smooth + 1
-        labels = [os.path.splitext(os.path.basename(p))[0] for p in args.runs]
+        named = [lr for p in args.runs for lr in read_runs(p, args.frame)]
+        labels = [label for label, _ in named]
         if args.labels is not None:
             labels = args.labels.split(",")
-            if len(labels) != len(args.runs):
+            if len(labels) != len(named):
                 raise InputError("--labels: expected %d labels (one per run), got %d"
-                                 % (len(args.runs), len(labels)))
-        runs = [read_run(p, args.frame) for p in args.runs]
-        lines = series(runs, labels, args.pass_)
+                                 % (len(named), len(labels)))
+        lines = series([run for _, run in named], labels, args.pass_)
         if not lines:
             raise InputError("--pass %s: no rows of that pass in %s"
                              % (args.pass_, ", ".join(args.runs)))
         out_dir = os.path.dirname(os.path.abspath(args.output))
         os.makedirs(out_dir, exist_ok=True)
-        plot(lines, args.frame, window, args.title, args.output)
+        plot(lines, args.frame, window, args.title, args.output, args.force_only)
     except InputError as e:
         print("plot_wrench: %s" % e, file=sys.stderr)
         return 2

@@ -64,6 +64,78 @@ TEST(NeighborTest, HalfListEqualsBruteForce) {
   }
 }
 
+// The list of a cloud sorted and built over its own bounding box, as System::Rebuild does, as a set
+// of pairs of original indices; pairs of one group (group[i] == group[j] >= 0) left out when a
+// group is given.
+std::set<std::pair<int, int>> BuildPairs(const Cloud& c, double r_max, double skin,
+                                         const std::vector<int32_t>* group) {
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const Vec3& x : c.x) {
+    lo = {std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
+    hi = {std::max(hi.x, x.x), std::max(hi.y, x.y), std::max(hi.z, x.z)};
+  }
+  NeighborList list;
+  list.SetupGrid(lo, hi, 2 * r_max + skin, c.x.size());
+  std::vector<int32_t> visit(c.x.size()), perm;
+  for (size_t i = 0; i < visit.size(); ++i) visit[i] = static_cast<int32_t>(i);
+  list.ComputeOrder(c.x.data(), visit, &perm);
+  Cloud s;
+  std::vector<int32_t> g;
+  for (int32_t old : perm) {
+    s.x.push_back(c.x[old]);
+    s.r.push_back(c.r[old]);
+    if (group) g.push_back((*group)[old]);
+  }
+  list.Build(s.x.data(), s.r.data(), s.x.size(), skin, 2, group ? g.data() : nullptr);
+  std::set<std::pair<int, int>> found;
+  for (size_t i = 0; i + 1 < list.start.size(); ++i)
+    for (int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {
+      const int a = perm[i], b = perm[list.partner[k]];
+      found.insert({std::min(a, b), std::max(a, b)});
+    }
+  return found;
+}
+
+std::set<std::pair<int, int>> BrutePairs(const Cloud& c, double skin,
+                                         const std::vector<int32_t>* group) {
+  std::set<std::pair<int, int>> expected;
+  for (size_t i = 0; i < c.x.size(); ++i)
+    for (size_t j = i + 1; j < c.x.size(); ++j) {
+      const double reach = c.r[i] + c.r[j] + skin;
+      const bool same = group && (*group)[i] >= 0 && (*group)[i] == (*group)[j];
+      if (!same && Norm2(c.x[i] - c.x[j]) < reach * reach)
+        expected.insert({static_cast<int>(i), static_cast<int>(j)});
+    }
+  return expected;
+}
+
+// A flat layer (all centres within less than one cutoff in z, as a layer resting on a floor):
+// the cells must still be at least one cutoff wide along x and y.
+TEST(NeighborTest, FlatLayerEqualsBruteForce) {
+  const double r = 1e-3, skin = 2.5e-4;
+  Rng rng(5);
+  Cloud c;
+  for (int i = 0; i < 800; ++i) {
+    c.x.push_back({rng.Uniform(0, 0.04), rng.Uniform(0, 0.04), r + rng.Uniform(0, 0.5 * r)});
+    c.r.push_back(r);
+  }
+  const auto expected = BrutePairs(c, skin, nullptr);
+  EXPECT_GT(expected.size(), 300u);
+  EXPECT_EQ(BuildPairs(c, r, skin, nullptr), expected);
+}
+
+// With groups (the spheres of one rigid clump), pairs within a group are left out, all others kept.
+TEST(NeighborTest, PairsWithinAGroupAreLeftOut) {
+  const double r_max = 1e-3, skin = 2.5e-4;
+  const Cloud c = RandomCloud(2000, 9, 3e-4, r_max);
+  std::vector<int32_t> group(c.x.size());
+  for (size_t i = 0; i < group.size(); ++i)
+    group[i] = i % 5 == 0 ? -1 : static_cast<int32_t>(i / 3);
+  const auto expected = BrutePairs(c, skin, &group);
+  EXPECT_LT(expected.size(), BrutePairs(c, skin, nullptr).size());
+  EXPECT_EQ(BuildPairs(c, r_max, skin, &group), expected);
+}
+
 // The property the parallel force loop relies on: a pair's partner lies in the owner's slab or the
 // next one.
 TEST(NeighborTest, PartnersLieInOwnOrNextSlab) {

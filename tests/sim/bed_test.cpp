@@ -3,11 +3,13 @@
 #include "sim/bed.h"
 
 #include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "sim/scene.h"
+#include "tests/cli_util.h"
 
 namespace sim {
 namespace {
@@ -99,6 +101,53 @@ void Bed::WallsCarryTheWeight() {
   }
   EXPECT_NEAR(all, weight, 0.01 * weight);
   EXPECT_LT(floor, 0.99 * weight) << "side walls carry part of the weight (Janssen)";
+}
+
+// A bed of 200 four-sphere tetrahedra (paper Table 6 ice, Earth gravity so it settles in 0.4 s)
+// poured at random orientations and settled: every clump ends slower than 1 mm/s, and the walls
+// carry the clumps' weight (sum of m g, within 1%, averaged over 200 steps): gravity acts on each
+// clump once, at its centre of mass.
+TEST(SettledBedTest, ClumpBedOfTetrahedraAtRest) {
+  const std::filesystem::path dir = scoopsim_test::ProcessTempDir("bed_test");
+  const std::string path = (dir / "clumps.yaml").string();
+  std::ofstream(path) << "materials: " << SCOOPSIM_SOURCE_DIR << "/scenes/materials.yaml\n"
+                      << R"(gravity: [0, 0, -9.81]
+time_step: {rayleigh_fraction: 0.25}
+box: {min: [0, 0, 0], max: [0.035, 0.035, 0.08], wall_material: wall}
+bed:
+  material: ice
+  clump: tetra4
+  count: 200
+  seed: 2
+  fill_fraction: 0.3
+  settle: {kinetic_energy: 1.0e-13, max_time: 1.5}
+)";
+  const Scene scene = LoadScene(path);
+  std::filesystem::remove_all(dir);
+  dem::System system(scene.materials, MakeSystemConfig(scene));
+  system.set_num_threads(2);
+  const SettleReport report = FillAndSettle(scene, &system, nullptr);
+  ASSERT_TRUE(report.status.ok()) << report.status.message;
+  EXPECT_TRUE(report.settled) << "mean KE " << report.mean_ke << " J after " << report.sim_time;
+  const dem::Clumps& c = system.clumps();
+  ASSERT_EQ(static_cast<int64_t>(c.size()), scene.bed.count);
+  EXPECT_EQ(system.num_bodies(), scene.bed.count);
+  EXPECT_EQ(system.particles().size(), 4u * c.size());
+  double fastest = 0, weight = 0;
+  for (size_t k = 0; k < c.size(); ++k) {
+    fastest = std::max(fastest, dem::Norm(c.v[k]));
+    weight += c.mass[k] * -scene.gravity.z;
+  }
+  EXPECT_LT(fastest, 1e-3) << "m/s";
+  double all = 0;
+  const int steps = 200;
+  for (int k = 0; k < steps; ++k) {
+    const dem::StepStatus st = system.Step();
+    ASSERT_TRUE(st.ok()) << st.message;
+    for (size_t w = 0; w < system.config().planes.size(); ++w)
+      all += -system.plane_force(static_cast<int>(w)).z / steps;
+  }
+  EXPECT_NEAR(all, weight, 0.01 * weight);
 }
 
 }  // namespace

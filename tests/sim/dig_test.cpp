@@ -149,6 +149,35 @@ TEST(DigTest, CavityHoldsInsideOnly) {
   EXPECT_DOUBLE_EQ(mass, 1e-3);
 }
 
+// A clump counts by its centre of mass: one whose CoM is inside is held whole (every sphere, its
+// mass once) though a sphere sticks out; one whose CoM is outside is not, though a sphere is in.
+TEST(DigTest, CavityHoldsClumpsByTheirCentreOfMass) {
+  dem::MaterialTable t;
+  t.Add({"ice", 900.0, 1.0e7, 0.36});
+  t.SetInteraction(0, 0, {0.88, 0.58, 0.05});
+  dem::SystemConfig c;
+  c.time_step = 1e-6;
+  c.skin = 1e-3;
+  c.domain_min = {-1, -1, -1};
+  c.domain_max = {1, 1, 1};
+  dem::System s(t, c);
+  // A rod of two spheres 8 mm apart, its CoM at the middle.
+  const int rod = s.AddClumpTemplate({"rod", {{-4e-3, 0, 0}, {4e-3, 0, 0}}, {2e-3, 2e-3}});
+  const dem::Vec3 lo{0, 0, 0}, hi{0.01, 0.01, 0.01};
+  dem::Pose in, out;
+  in.position = {0.007, 0.005, 0.005};   // CoM inside, the +x sphere at 0.011: outside
+  out.position = {0.013, 0.005, 0.005};  // CoM outside, the -x sphere at 0.009: inside
+  s.AddClump(rod, in, {}, {}, 0);
+  s.AddClump(rod, out, {}, {}, 0);
+  double mass = 0;
+  const std::vector<int64_t> ids =
+      ParticlesInCavity(s.particles(), dem::Pose{}, lo, hi, &mass, &s.clumps());
+  ASSERT_EQ(ids.size(), 2u);
+  EXPECT_EQ(ids[0], s.clumps().member[0]);
+  EXPECT_EQ(ids[1], s.clumps().member[1]);
+  EXPECT_DOUBLE_EQ(mass, s.clumps().mass[0]);
+}
+
 }  // namespace
 }  // namespace sim
 

@@ -288,6 +288,36 @@ TEST_F(H5Test, AppendRowRoundTripIsBitIdenticalChunkedAndDeflated) {
   EXPECT_EQ(h5::ReadStringAttribute(root.get(), "status"), "replaced");
 }
 
+// SetGroup puts rows and attributes under a group (a study's one dig per group); "" returns to
+// the root. The same dataset name in two groups is two series.
+TEST_F(H5Test, SetGroupPutsRowsAndAttributesUnderIt) {
+  {
+    H5Output out(Path("study.h5"), "scene", "v");
+    const double one = 1, two = 2;
+    out.SetGroup("tetra4");
+    out.AppendRow("/scoop/time", &one, 1);
+    out.SetAttribute("clumps", 40.0);
+    out.SetGroup("/tetra12/");
+    out.AppendRow("/scoop/time", &two, 1);
+    out.AppendRow("/scoop/time", &two, 1);
+    out.SetStateHash(7);
+    out.SetGroup("");
+    out.AppendRow("/table/x", &one, 1);
+    out.SetAttribute("study", std::string("shape"));
+  }
+  Handle file = OpenFile(Path("study.h5"));
+  EXPECT_EQ(ReadDoubles(file.get(), "/tetra4/scoop/time"), std::vector<double>{1});
+  EXPECT_EQ(ReadDoubles(file.get(), "/tetra12/scoop/time"), (std::vector<double>{2, 2}));
+  EXPECT_EQ(ReadDoubles(file.get(), "/table/x"), std::vector<double>{1});
+  Handle g4(H5Gopen2(file.get(), "/tetra4", H5P_DEFAULT), H5Gclose);
+  EXPECT_EQ(ReadDoubleAttribute(g4.get(), "clumps"), 40.0);
+  Handle g12(H5Gopen2(file.get(), "/tetra12", H5P_DEFAULT), H5Gclose);
+  EXPECT_EQ(h5::ReadStringAttribute(g12.get(), "state_hash"), "0000000000000007");
+  Handle root(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose);
+  EXPECT_EQ(h5::ReadStringAttribute(root.get(), "study"), "shape");
+  EXPECT_EQ(H5Aexists(root.get(), "clumps"), 0);
+}
+
 // A series keeps the width of its first row; another width is a programming error.
 TEST_F(H5Test, AppendRowRejectsAWidthChange) {
   H5Output out(Path("run.h5"), "", "v");
@@ -788,6 +818,63 @@ TEST_F(H5Test, BedLoadErrorsNameFileAndDataset) {
     dem::System s(OneMaterial(), SmallConfig());
     expect_error(broken, &s, {broken, "/particles/radius", "expected shape (3), got (3, 2)"});
   }
+}
+
+// A bed with a clump (a 12-sphere tetrahedron, spinning) among single spheres: saved and loaded
+// into a new System, the clump's state (CoM, orientation, velocity, angular momentum, last force
+// and torque) and its spheres come back exactly, so the state hash does. A file whose member list
+// does not match its particles is refused naming /clumps/member.
+TEST_F(H5Test, ClumpBedRoundTripIsExactAndABrokenMemberListIsRefused) {
+  const std::string path = Path("clump_bed.h5");
+  dem::System saved(OneMaterial(), SmallConfig());
+  FillSmallBed(&saved);
+  const int shape = saved.AddClumpTemplate(*dem::FindBuiltinTemplate("tetra12"));
+  dem::Pose pose;
+  pose.position = {0.05, 0.05, 0.02};
+  pose.orientation = dem::Normalized(dem::Quat{0.3, -0.2, 0.9, 0.1});
+  saved.AddClump(shape, pose, {0.01, 0.0, -0.02}, {3.0, -1.0, 2.0}, 0);
+  for (int k = 0; k < 3; ++k) ASSERT_TRUE(saved.Step().ok());
+  saved.Canonicalize();
+  SaveBed(path, saved, "");
+  dem::System loaded(OneMaterial(), SmallConfig());
+  LoadBed(path, &loaded);
+  loaded.Canonicalize();
+  ASSERT_EQ(loaded.clumps().size(), 1u);
+  const dem::Clumps &a = saved.clumps(), &b = loaded.clumps();
+  ExpectSameVec(a.x[0], b.x[0]);
+  ExpectSameVec(a.v[0], b.v[0]);
+  ExpectSameVec(a.l[0], b.l[0]);
+  ExpectSameVec(a.f[0], b.f[0]);
+  ExpectSameVec(a.t[0], b.t[0]);
+  EXPECT_EQ(Bits(a.q[0].w), Bits(b.q[0].w));
+  EXPECT_EQ(a.member, b.member);
+  EXPECT_EQ(a.mass[0], b.mass[0]);
+  EXPECT_EQ(saved.StateHash(), loaded.StateHash());
+  for (int k = 0; k < 20; ++k) {
+    ASSERT_TRUE(saved.Step().ok());
+    ASSERT_TRUE(loaded.Step().ok());
+  }
+  EXPECT_EQ(saved.StateHash(), loaded.StateHash()) << "the restored bed replays bit for bit";
+
+  const std::string broken = Path("broken_clump_bed.h5");
+  fs::copy_file(path, broken);
+  {
+    Handle file = OpenFile(broken, H5F_ACC_RDWR);
+    ASSERT_GE(H5Ldelete(file.get(), "/clumps/member", H5P_DEFAULT), 0);
+    std::vector<int64_t> member(a.member.rbegin(), a.member.rend());  // not in order
+    Handle clumps(H5Gopen2(file.get(), "/clumps", H5P_DEFAULT), H5Gclose);
+    h5::WriteArray(clumps.get(), "member", H5T_STD_I64LE, H5T_NATIVE_INT64, member.data(),
+                   member.size(), 1);
+  }
+  dem::System s(OneMaterial(), SmallConfig());
+  try {
+    LoadBed(broken, &s);
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(broken + ": /clumps/member: clump 0"), std::string::npos) << what;
+  }
+  EXPECT_EQ(s.particles().size(), 0u) << "a refused bed must not be half loaded";
 }
 
 }  // namespace

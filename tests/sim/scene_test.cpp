@@ -139,6 +139,59 @@ bed: {material: snow, radius: [1.0e-3, 2.0e-3], count: 100}
   EXPECT_EQ(scene.materials.interaction(snow, wall).restitution, 0.7);
 }
 
+// A bed of clumps: the template's smallest sphere sets the time step (paper eq. 4), its largest
+// the default skin, its bounding radius radius_max; a scene template works like a built-in one;
+// WithClumpBed keeps the bed's solid volume.
+TEST(SceneTest, ClumpBedTakesItsStepFromTheSmallestSphere) {
+  WriteSnowWallMaterials("clumps_mats.yaml", "[snow, wall]");
+  const std::string path = WriteFile("clumps.yaml", R"(materials: clumps_mats.yaml
+gravity: [0, 0, -1.3]
+box: {min: [0, 0, 0], max: [0.05, 0.05, 0.08], wall_material: wall}
+bed: {material: snow, clump: tetra12, count: 100}
+clump_templates:
+  rod: {spheres: [[0, 0, 0, 1.0e-3], [0, 0, 1.5e-3, 0.5e-3]]}
+health: {max_overlap: 0.1}
+)");
+  const Scene scene = LoadScene(path);
+  EXPECT_EQ(scene.bed.clump, "tetra12");
+  EXPECT_EQ(scene.bed.clump_template.radii.size(), 12u);
+  EXPECT_EQ(scene.bed.radius_min, 0.4375e-3);
+  EXPECT_NEAR(scene.bed.radius_max, 6.1237e-3 - 3 * 0.4375e-3 + 0.4375e-3, 1e-6);  // to its tip
+  EXPECT_EQ(scene.skin, 0.5 * 1.75e-3);
+  EXPECT_EQ(scene.max_overlap, 0.1);
+  const double expected = 0.2 * RayleighClosedForm(0.4375e-3, 300.0, 1.0e7, 0.36);
+  EXPECT_NEAR(scene.time_step, expected, 1e-12 * expected);
+  ASSERT_EQ(scene.clump_templates.size(), 1u);
+  EXPECT_EQ(scene.clump_templates[0].name, "rod");
+  // The same solid volume in clumps of another template: count scales with 1 / volume.
+  const Scene rod = WithClumpBed(scene, scene.clump_templates[0]);
+  EXPECT_EQ(rod.bed.clump, "rod");
+  EXPECT_EQ(rod.bed.radius_min, 0.5e-3);
+  EXPECT_NEAR(rod.bed.count * rod.bed.clump_volume, 100 * scene.bed.clump_volume,
+              0.5 * rod.bed.clump_volume);
+  EXPECT_NEAR(rod.time_step, 0.2 * RayleighClosedForm(0.5e-3, 300.0, 1.0e7, 0.36), 1e-15);
+  EXPECT_EQ(rod.skin, 0.5e-3);
+}
+
+// The study's ice scenes (tools/make_paper_scenes.py) use the 4-sphere tetrahedron, as the study
+// chose, with as many clumps as hold the solid volume of the bed at a solid fraction of 0.59: the
+// generator's tetra4 volume agrees with dem::ClumpMassProperties (within 1e-4).
+TEST(SceneTest, PaperIceScenesUseTheFourSphereClump) {
+  for (const char* file : {"bed_ice.yaml", "lut_ice_b15.yaml", "lut_ice_b3.yaml"}) {
+    SCOPED_TRACE(file);
+    const Scene scene = LoadScene(kSourceDir + "/scenes/paper/" + file);
+    EXPECT_EQ(scene.bed.clump, "tetra4");
+    EXPECT_EQ(scene.bed.material, "ice");
+    const double solid = 0.59 * 0.62 * 0.22 * 0.15;
+    EXPECT_NEAR(scene.bed.count * scene.bed.clump_volume, solid, 1e-4 * solid);
+    // 3.5 mm spheres: the step of the snow scenes' spheres of the same size.
+    EXPECT_NEAR(scene.time_step, 0.25 * RayleighClosedForm(1.75e-3, 900.0, 1.0e7, 0.36), 1e-15);
+  }
+  const Scene shape = LoadScene(kSourceDir + "/scenes/paper/shape_study.yaml");
+  EXPECT_EQ(shape.bed.clump, "tetra4");
+  EXPECT_TRUE(shape.dig.enabled);
+}
+
 TEST(SceneTest, BedFileIsResolvedAgainstTheScenesFolder) {
   WriteSnowWallMaterials("bedfile_mats.yaml", "[snow, wall]");
   const std::string path = WriteFile("bedfile.yaml", R"(materials: bedfile_mats.yaml
@@ -467,6 +520,59 @@ const BadCase kBadCases[] = {
      "",
      "",
      {"@.yaml:11: duration: expected a number >= 0 (s), got -1"}},
+    {"unknown_clump_template",
+     "  radius: 1.75e-3",
+     "  clump: tetra5",
+     "",
+     "",
+     {"@.yaml:8: bed.clump: expected a clump template (tetra1, tetra4, tetra8, tetra12), "
+      "got tetra5"}},
+    {"clump_and_radius",
+     "  seed: 1",
+     "  seed: 1\n  clump: tetra4",
+     "",
+     "",
+     {"@.yaml:8: bed.radius: expected no bed.radius with bed.clump", "got 1.75e-3"}},
+    {"clump_template_negative_radius",
+     "duration: 0.01",
+     "duration: 0.01\nclump_templates:\n  rod: {spheres: [[0, 0, 0, 1e-3], [0, 0, 1e-3, -1]]}",
+     "",
+     "",
+     {"@.yaml:13: clump_templates.rod.spheres[1]: expected [x, y, z, r] with r > 0 (m), "
+      "got [0, 0, 1e-3, -1]"}},
+    {"clump_template_three_numbers",
+     "duration: 0.01",
+     "duration: 0.01\nclump_templates:\n  rod:\n    spheres:\n      - [0, 0, 1e-3]",
+     "",
+     "",
+     {"@.yaml:15: clump_templates.rod.spheres[0]: expected [x, y, z, r] with r > 0 (m), "
+      "got [0, 0, 1e-3]"}},
+    {"clump_template_builtin_name",
+     "duration: 0.01",
+     "duration: 0.01\nclump_templates:\n  tetra4: {spheres: [[0, 0, 0, 1e-3]]}",
+     "",
+     "",
+     {"@.yaml:13: clump_templates.tetra4: expected a name other than the built-in tetra1, "
+      "tetra4, tetra8, tetra12, got 'tetra4'"}},
+    {"clump_template_unknown_key",
+     "duration: 0.01",
+     "duration: 0.01\nclump_templates:\n  rod: {spheres: [[0, 0, 0, 1e-3]], scale: 2}",
+     "",
+     "",
+     {"@.yaml:13: clump_templates.rod.scale: expected one of the keys spheres", "unknown key"}},
+    {"clump_name_typo",
+     "  radius: 1.75e-3",
+     "  clump: rood",
+     "",
+     "",
+     {"@.yaml:8: bed.clump: expected a clump template (tetra1, tetra4, tetra8, tetra12)",
+      "got rood"}},
+    {"max_overlap_zero",
+     "duration: 0.01",
+     "duration: 0.01\nhealth: {max_overlap: 0}",
+     "",
+     "",
+     {"@.yaml:12: health.max_overlap: expected a number in (0, 0.5]", "got 0"}},
     {"box_not_a_map",
      "box: {min: [0, 0, 0], max: [0.05, 0.05, 0.08], wall_material: wall}",
      "box: 0.05",

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """tools/plot_wrench.py on synthetic run files: writes a PNG for one and several runs, every frame
-and a single pass; a missing dataset or file gives one line and exit status 2."""
+and a single pass, and for a shape-study file (one run per template group, --force-only); a
+missing dataset or file gives one line and exit status 2."""
 
 import os
 import subprocess
@@ -32,6 +33,22 @@ def make_run(path, passes=2, n=400, drop=None, seed=0):
                 f["scoop/" + name] = value
 
 
+def make_study(path, drop_group=None):
+    """A shape-study file shaped like scoopsim's: one group per template with a run's /scoop."""
+    templates = ["tetra1", "tetra4", "tetra8", "tetra12"]
+    with h5py.File(path, "w") as f:
+        f.attrs["study"] = "shape"
+        f.attrs["templates"] = ",".join(templates)
+        for k, name in enumerate(templates):
+            if name == drop_group:
+                continue
+            run = os.path.join(os.path.dirname(path), name + "_tmp.h5")
+            make_run(run, passes=1, n=200, seed=k)
+            with h5py.File(run, "r") as src:
+                src.copy("scoop", f, name + "/scoop")
+            f[name].attrs["spheres_per_clump"] = float([1, 4, 8, 12][k])
+
+
 def run(args):
     return subprocess.run([sys.executable, SCRIPT] + args, capture_output=True, text=True)
 
@@ -59,6 +76,18 @@ def main():
         png = os.path.join(d, "sub", "raw.png")
         check_png(run([b, "-o", png, "--smooth", "1"]), png, "no smoothing, new folder")
 
+        # A shape study: four runs from one file, |F| alone or the full layout.
+        study = os.path.join(d, "study.h5")
+        make_study(study)
+        png = os.path.join(d, "study_force.png")
+        result = run([study, "-o", png, "--force-only"])
+        check_png(result, png, "shape study, |F| only")
+        assert "4 lines" in result.stdout, result.stdout
+        png = os.path.join(d, "study_all.png")
+        check_png(run([study, "-o", png, "--labels", "a,b,c,d"]), png, "shape study, all panels")
+        broken_study = os.path.join(d, "broken_study.h5")
+        make_study(broken_study, drop_group="tetra8")
+
         # Bad input: one line on stderr, exit 2.
         broken = os.path.join(d, "broken.h5")
         make_run(broken, drop="torque_body")
@@ -67,13 +96,16 @@ def main():
                               "no such file"),
                              ([a, "-o", os.path.join(d, "x.png"), "--pass", "7"], "--pass 7"),
                              ([a, b, "-o", os.path.join(d, "x.png"), "--labels", "one"],
-                              "--labels")):
+                              "--labels"),
+                             ([broken_study, "-o", os.path.join(d, "x.png")], "no group /tetra8"),
+                             ([study, "-o", os.path.join(d, "x.png"), "--labels", "a,b"],
+                              "expected 4 labels")):
             result = run(args)
             assert result.returncode == 2, "%s: exit %d, expected 2" % (args, result.returncode)
             lines = result.stderr.strip().splitlines()
             assert len(lines) == 1 and needle in lines[0], "%s: stderr %r" % (args, result.stderr)
         assert not os.path.exists(os.path.join(d, "x.png"))
-    print("plot_wrench_test: 4 plots written, 4 bad inputs refused with exit 2")
+    print("plot_wrench_test: 6 plots written, 6 bad inputs refused with exit 2")
     return 0
 
 
