@@ -140,7 +140,7 @@ output: {{flush_seconds: 10}}
     # of the size_study material as tetra4 clumps; `scoopsim study shape` swaps the template.
     lx, ly, depth = 0.62, 0.22, 0.1
     n = clumps_for(lx, ly, depth)
-    shape_dig = table1_dig(ly, "health: {max_overlap: 0.15}\n")
+    shape_dig = table1_dig(ly, "health: {max_overlap: 0.35}\n")  # see shape_study_small.yaml
     write("shape_study.yaml", f"""\
 # Shape-complexity study (paper section 4, Table 3, Fig. 8): the Table 1 dig, one pass, bite
 # 15 mm, on beds of tetrahedral clumps of 1, 4, 8 and 12 spheres (dem/clump.h), each holding the
