@@ -1256,6 +1256,14 @@ void System::Diagnose(StepStatus* status) const {
     const Impl& m = *impl_;
     double worst = 0;
     int64_t id = -1;
+    std::string against;
+    auto where = [&](size_t i) {
+      std::ostringstream s;
+      s.precision(4);
+      s << "(radius " << p_.radius[i] << " m at [" << p_.x[i].x << ", " << p_.x[i].y << ", "
+        << p_.x[i].z << "] m)";
+      return s.str();
+    };
     for (size_t i = 0; i + 1 < m.list.start.size(); ++i)
       for (int32_t k = m.list.start[i]; k < m.list.start[i + 1]; ++k) {
         const int32_t j = m.list.partner[k];
@@ -1263,7 +1271,10 @@ void System::Diagnose(StepStatus* status) const {
                           (2.0 * std::min(p_.radius[i], p_.radius[j]));
         if (ov > worst) {
           worst = ov;
-          id = std::min(p_.id[i], p_.id[j]);
+          const size_t a = p_.id[i] < p_.id[j] ? i : j, b = a == i ? j : i;
+          id = p_.id[a];
+          against = " " + where(a) + " against particle " + std::to_string(p_.id[b]) + " " +
+                    where(b);
         }
       }
     for (size_t e = 0; e < m.wall_i.size(); ++e) {
@@ -1273,9 +1284,9 @@ void System::Diagnose(StepStatus* status) const {
       if (ov > worst) {
         worst = ov;
         id = p_.id[i];
+        against = " " + where(i) + " against wall plane " + std::to_string(m.wall_k[e]);
       }
     }
-    std::string against;
     if (m.mesh_worst > worst && m.mesh_worst_id >= 0) {
       worst = m.mesh_worst;
       id = m.mesh_worst_id;

@@ -117,6 +117,8 @@ TEST(HealthTest, ReportsOverlapSpeedAndNonFiniteState) {
     const StepStatus st = s.Step();
     EXPECT_TRUE(st.flags & kExcessiveOverlap);
     EXPECT_EQ(st.particle, 0);
+    // It names the partner of the deepest overlap.
+    EXPECT_NE(st.message.find("against particle 1 "), std::string::npos) << st.message;
     EXPECT_NE(st.message.find("rayleigh_fraction"), std::string::npos) << st.message;
     EXPECT_NE(st.message.find("t = "), std::string::npos) << st.message;
   }
