@@ -414,6 +414,23 @@ void SaveBed(const std::string& path, const dem::System& system, const std::stri
   h5::WriteXdmf(path, {entry});
 }
 
+std::string BedSceneYaml(const std::string& path) {
+  hid_t file_id = H5I_INVALID_HID;
+  H5E_BEGIN_TRY { file_id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT); }
+  H5E_END_TRY;
+  if (file_id < 0) return "";
+  Handle file(file_id, H5Fclose);
+  htri_t exists = -1;
+  H5E_BEGIN_TRY { exists = H5Aexists(file.get(), "scene_yaml"); }
+  H5E_END_TRY;
+  if (exists <= 0) return "";
+  try {
+    return h5::ReadStringAttribute(file.get(), "scene_yaml");
+  } catch (const std::exception&) {
+    return "";
+  }
+}
+
 void LoadBed(const std::string& path, dem::System* system) {
   namespace fs = std::filesystem;
   std::error_code ec;

@@ -42,4 +42,8 @@ void SaveBed(const std::string& path, const dem::System& system, const std::stri
 // missing file or dataset, a wrong shape or type, or a material the system does not have.
 void LoadBed(const std::string& path, dem::System* system);
 
+// The scene text a bed file was made from (its root attribute `scene_yaml`); "" when the file
+// cannot be opened or has no such attribute.
+std::string BedSceneYaml(const std::string& path);
+
 }  // namespace sim

@@ -256,7 +256,15 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
     const auto bed0 = std::chrono::steady_clock::now();
     const std::string bed_path =
         options.bed_dir.empty() ? "" : (fs::path(options.bed_dir) / (t.name + ".h5")).string();
-    if (!bed_path.empty() && fs::exists(bed_path)) {
+    // A cached bed is used only when it was made from this very scene text: a bed of another
+    // box or count would silently change the study.
+    bool cached = !bed_path.empty() && fs::exists(bed_path);
+    if (cached && BedSceneYaml(bed_path) != s.yaml_text) {
+      cached = false;
+      std::fprintf(stderr, "scoopsim: study shape: %s was made from another scene; making it again\n",
+                   bed_path.c_str());
+    }
+    if (cached) {
       LoadBed(bed_path, system.get());
       system->Canonicalize();
     } else {

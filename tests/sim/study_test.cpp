@@ -41,9 +41,9 @@ void WriteBoxStl(const fs::path& path, double h, double t) {
   out << "endsolid tool\n";
 }
 
-std::string WriteScene() {
+std::string WriteScene(int count = 60, const std::string& name = "tiny_shape.yaml") {
   WriteBoxStl(TempDir() / "tool.stl", 0.01, 0.002);
-  const fs::path path = TempDir() / "tiny_shape.yaml";
+  const fs::path path = TempDir() / name;
   std::ofstream(path) << "materials: " << SCOOPSIM_SOURCE_DIR << "/scenes/materials.yaml\n"
                       << R"(gravity: [0, 0, -9.81]
 time_step: {rayleigh_fraction: 0.3}
@@ -51,7 +51,7 @@ box: {min: [0, 0, 0], max: [0.06, 0.05, 0.05], wall_material: wall}
 bed:
   material: ice
   clump: tetra4
-  count: 60
+  count: )" << count << R"(
   seed: 4
   fill_fraction: 0.3
   settle: {kinetic_energy: 1.0, max_time: 0.5}
@@ -151,6 +151,45 @@ TEST(ShapeStudyTest, RunsEveryTemplateIntoOneFile) {
   text << std::ifstream(log).rdbuf();
   for (const char* name : names)
     EXPECT_NE(text.str().find(std::string("| ") + name + " |"), std::string::npos) << text.str();
+}
+
+// --beds DIR keeps each template's bed; a later study loads it only when the bed was made from
+// the same scene text, else it makes the bed again (a stale bed of another count would silently
+// change the study).
+TEST(ShapeStudyTest, CachedBedIsReusedOnlyForTheSameScene) {
+  const fs::path beds = TempDir() / "beds";
+  auto study = [&](const std::string& scene, const std::string& tag, std::string* text) {
+    const std::string out = (TempDir() / ("cache_" + tag + ".h5")).string();
+    const std::string log = (TempDir() / ("cache_" + tag + ".log")).string();
+    EXPECT_EQ(scoopsim_test::RunScoopsim("study shape " + scene + " -o " + out +
+                                             " --templates tetra1 --threads 1 -q --beds " +
+                                             beds.string(),
+                                         log),
+              0);
+    std::stringstream s;
+    s << std::ifstream(log).rdbuf();
+    *text = s.str();
+    const hid_t file = H5Fopen(out.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    EXPECT_GE(file, 0);
+    if (file < 0) return -1.0;
+    const double clumps = ReadAttribute(file, "/tetra1", "clumps");
+    H5Fclose(file);
+    return clumps;
+  };
+  std::string first, second, third;
+  const std::string scene = WriteScene(60, "cache_a.yaml");
+  // (a tetra1 bed holds the solid volume of `count` four-sphere clumps, so more than `count`)
+  const double made = study(scene, "first", &first);
+  EXPECT_GT(made, 60);
+  ASSERT_TRUE(fs::exists(beds / "tetra1.h5"));
+  EXPECT_EQ(first.find("making it again"), std::string::npos) << first;
+  EXPECT_EQ(study(scene, "second", &second), made);
+  EXPECT_EQ(second.find("making it again"), std::string::npos) << second;
+  // Another count: the cached bed is not this scene's, so the bed is made again and is larger.
+  EXPECT_GT(study(WriteScene(70, "cache_b.yaml"), "third", &third), made);
+  EXPECT_NE(third.find("tetra1.h5 was made from another scene; making it again"),
+            std::string::npos)
+      << third;
 }
 
 TEST(ShapeStudyTest, UnknownTemplateIsBadInput) {
