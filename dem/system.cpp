@@ -76,6 +76,17 @@ struct System::Impl {
   double asleep_drift = 0;  // largest displacement since the last build of the particles asleep
                             // at the last RefreshActive (they move no more) [m]
   double skin = 0;
+  // The near list: of each particle's list pairs, those whose gap (distance - r_i - r_j) was
+  // below near_skin when it was made, kept in list order at the front of the particle's range
+  // (near_k[start[i] .. start[i] + near_count[i]] hold the list indices k). No other pair can
+  // touch before some particle has moved near_skin / 2, which near_bound (the sum of dt max |v|
+  // since it was made) bounds; the force pass scans only these pairs.
+  std::vector<int32_t> near_k;      // list pair indices (num_pairs)
+  std::vector<int32_t> near_count;  // near pairs of each particle (N)
+  double near_skin = 0;             // [m]
+  double near_bound = 0;            // [m]
+  bool near_valid = false;
+  int64_t near_builds = 0, near_pairs = 0;
   double cutoff_radius = 0;  // largest radius the grid was set up for [m]
   size_t grid_capacity = 0;  // particle count the grid was sized for
 
@@ -167,6 +178,7 @@ System::System(MaterialTable materials, SystemConfig config)
     }
   plane_force_.assign(np, Vec3{});
   impl_->skin = config_.skin;
+  impl_->near_skin = config_.near_fraction * config_.skin;
   num_threads_ = omp_get_max_threads();
 }
 
@@ -264,6 +276,8 @@ void System::Touch() { impl_->needs_rebuild = true; }
 NeighborStats System::neighbor_stats() const {
   NeighborStats s;
   s.builds = builds_;
+  s.near_builds = impl_->near_builds;
+  s.near_pairs = impl_->near_pairs;
   s.pairs = static_cast<int64_t>(impl_->list.num_pairs());
   s.contacts = impl_->contacts;
   s.wall_contacts = impl_->wall_contacts;
@@ -432,6 +446,7 @@ void System::Rebuild() {
   m.needs_rebuild = false;
   m.active_valid = false;
   m.busy_valid = false;
+  m.near_valid = false;
   ++builds_;
 }
 
@@ -451,6 +466,44 @@ void System::RefreshBusy() {
   }
   m.slab_busy[m.list.num_slabs()] = static_cast<int32_t>(m.busy.size());
   m.busy_valid = true;
+}
+
+void System::BuildNear() {
+  Impl& m = *impl_;
+  const size_t n = p_.size();
+  m.near_k.resize(m.list.num_pairs());
+  m.near_count.resize(n);
+  const Vec3* x = p_.x.data();
+  const double* radius = p_.radius.data();
+  const uint8_t* awake = p_.awake.data();
+  const bool sleeping = config_.sleep.enabled;
+  const int32_t* start = m.list.start.data();
+  const int32_t* partner = m.list.partner.data();
+  int32_t* near_k = m.near_k.data();
+  int32_t* near_count = m.near_count.data();
+  uint8_t* touched = m.touching.data();
+  const double s = m.near_skin;
+#pragma omp parallel for schedule(static) num_threads(num_threads_)
+  for (int64_t i = 0; i < static_cast<int64_t>(n); ++i) {
+    const Vec3 xi = x[i];
+    const double ri = radius[i];
+    int32_t at = start[i];
+    for (int32_t k = start[i]; k < start[i + 1]; ++k) {
+      const int32_t j = partner[k];
+      const double reach = ri + radius[j] + s;
+      if (Norm2(x[j] - xi) < reach * reach) {
+        near_k[at++] = k;
+      } else if (!sleeping || awake[i] || awake[j]) {
+        touched[k] = 0;  // as the force pass would mark it: not touching
+      }
+    }
+    near_count[i] = at - start[i];
+  }
+  m.near_bound = 0;
+  m.near_valid = true;
+  ++m.near_builds;
+  m.near_pairs = 0;
+  for (size_t i = 0; i < n; ++i) m.near_pairs += near_count[i];
 }
 
 // Hertz-Mindlin forces of a batch of particle pairs: the same law as EvaluateContact
@@ -563,6 +616,9 @@ void System::ComputeForces() {
 
   const bool compact = config_.sleep.enabled;
   if (compact && !m.busy_valid) RefreshBusy();
+  if (!m.near_valid) BuildNear();
+  const int32_t* near_k = m.near_k.data();
+  const int32_t* near_count = m.near_count.data();
   const int32_t* busy = m.busy.data();
   const uint8_t* awake = p_.awake.data();
   if (m.batches.size() < static_cast<size_t>(num_threads_)) m.batches.resize(num_threads_);
@@ -593,11 +649,13 @@ void System::ComputeForces() {
           int32_t block_end = block;
           for (; block_end < slab_end; ++block_end) {
             const int32_t i = compact ? busy[block_end] : block_end;
-            if (nb + static_cast<size_t>(start[i + 1] - start[i]) > m.batch_capacity) break;
+            if (nb + static_cast<size_t>(near_count[i]) > m.batch_capacity) break;
             const Vec3 xi = x[i];
             const double ri = radius[i];
             const bool awake_i = !compact || awake[i];
-            for (int32_t k = start[i]; k < start[i + 1]; ++k) {
+            // Only the near pairs can touch (see Impl::near_k).
+            for (int32_t q = start[i]; q < start[i] + near_count[i]; ++q) {
+              const int32_t k = near_k[q];
               const int32_t j = partner[k];
               const double rsum = ri + radius[j];
               // Two sleepers do not interact; their pair keeps its history untouched.
@@ -771,6 +829,8 @@ StepStatus System::Step() {
     rebuild = !(m.drift_bound <= half_skin);  // also on NaN
   }
   for (Impl::MeshState& ms : m.meshes) ms.particle_drift += dt * std::sqrt(max_v2);
+  m.near_bound += dt * std::sqrt(max_v2);
+  if (!(m.near_bound <= 0.5 * m.near_skin)) m.near_valid = false;  // also on NaN
   if (rebuild) Rebuild();
 
   ComputeForces();

@@ -44,6 +44,10 @@ struct SystemConfig {
   double time_step = 0;         // [s]
   double skin = 0;              // Verlet-list skin [m]; the list is rebuilt when a particle has
                                 // moved more than skin/2 since the last build
+  // The force pass scans only the list pairs closer than near_fraction * skin (gap between the
+  // surfaces), made again when some particle may have moved half that. A pure saving: any value
+  // > 0 gives bit-identical results (a larger one, the whole list).
+  double near_fraction = 0.1;
   Vec3 domain_min, domain_max;  // box that holds every particle; sets the cell grid [m]
   std::vector<Plane> planes;
   // Health limits (Step() reports, the caller decides to stop).
@@ -98,6 +102,8 @@ struct Particles {
 
 struct NeighborStats {
   int64_t builds = 0;         // neighbour-list builds so far
+  int64_t near_builds = 0;    // near-list builds so far (SystemConfig::near_fraction)
+  int64_t near_pairs = 0;     // near pairs at the last near-list build
   int64_t pairs = 0;          // half-list pairs (within cutoff + skin) at the last build
   int64_t contacts = 0;       // particle-particle pairs in contact after the last step
   int64_t wall_contacts = 0;  // particle-plane contacts after the last step
@@ -198,6 +204,7 @@ class System {
   void BuildMeshCandidates(int k);
   void UpdateSleep();    // sleep/wake decisions every sleep.check_every steps
   void RefreshActive();  // list the awake particles
+  void BuildNear();      // the pairs of the list that can touch before near_skin / 2 of motion
   void RefreshBusy();    // list the particles the force pass visits (sleeping on)
   struct ContactBatch;
   void PairForces(ContactBatch& batch, size_t n);  // forces of a batch of touching pairs

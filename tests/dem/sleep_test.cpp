@@ -151,8 +151,15 @@ TEST(SleepTest, WakingKeepsContactHistoryAndCostsNoRebuild) {
 
 // Determinism with sleeping and a moving mesh: spheres rained onto a sleeping layer while a cube
 // ploughs through it; 1 and 2 threads give the same hash.
-uint64_t RainHash(int threads) {
-  System s(test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05}), LayerConfig());
+struct RainResult {
+  uint64_t hash = 0;
+  NeighborStats stats;
+};
+RainResult Rain(int threads, double near_fraction, bool sleeping) {
+  SystemConfig config = LayerConfig();
+  config.near_fraction = near_fraction;
+  config.sleep.enabled = sleeping;
+  System s(test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05}), config);
   s.set_num_threads(threads);
   AddLayer(s);
   for (int k = 0; k < 30; ++k)
@@ -177,10 +184,29 @@ uint64_t RainHash(int threads) {
     touched = std::max(touched, s.mesh_wrench(mesh).contacts);
   }
   EXPECT_GT(touched, 0);  // the cube did plough into the layer
-  return s.StateHash();
+  return {s.StateHash(), s.neighbor_stats()};
 }
+uint64_t RainHash(int threads) { return Rain(threads, SystemConfig{}.near_fraction, true).hash; }
 
 TEST(SleepTest, SameResultForOneAndTwoThreads) { EXPECT_EQ(RainHash(1), RainHash(2)); }
+
+// The near list (SystemConfig::near_fraction) only skips pairs that cannot touch yet: the same
+// rain and plough, awake or sleeping, end in exactly the state (bit for bit) of a force pass that
+// scans every pair of the Verlet list (a near fraction so large that every pair is near).
+TEST(NearListTest, SameStateAsScanningTheWholeList) {
+  for (const bool sleeping : {false, true}) {
+    SCOPED_TRACE(sleeping ? "sleeping" : "awake");
+    const RainResult near = Rain(2, 0.1, sleeping);
+    const RainResult whole = Rain(2, 1e6, sleeping);
+    EXPECT_EQ(near.hash, whole.hash);
+    EXPECT_EQ(near.stats.builds, whole.stats.builds);
+    // The near list was made again many times in the run (1 m/s plough, 0.3 m/s rain) and
+    // holds fewer pairs than the whole list.
+    EXPECT_GT(near.stats.near_builds, 20);
+    EXPECT_LT(near.stats.near_pairs, whole.stats.near_pairs);
+    EXPECT_EQ(whole.stats.near_pairs, whole.stats.pairs);
+  }
+}
 
 }  // namespace
 }  // namespace dem
