@@ -466,6 +466,7 @@ void System::RefreshBusy() {
   }
   m.slab_busy[m.list.num_slabs()] = static_cast<int32_t>(m.busy.size());
   m.busy_valid = true;
+  m.near_valid = false;  // the near list covers the busy particles only
 }
 
 void System::BuildNear() {
@@ -483,8 +484,13 @@ void System::BuildNear() {
   int32_t* near_count = m.near_count.data();
   uint8_t* touched = m.touching.data();
   const double s = m.near_skin;
+  // With sleeping, only the particles the force pass visits (RefreshBusy makes the list again
+  // when that set changes).
+  const int32_t* busy = m.busy.data();
+  const int64_t visits = sleeping ? static_cast<int64_t>(m.busy.size()) : static_cast<int64_t>(n);
 #pragma omp parallel for schedule(static) num_threads(num_threads_)
-  for (int64_t i = 0; i < static_cast<int64_t>(n); ++i) {
+  for (int64_t a = 0; a < visits; ++a) {
+    const int64_t i = sleeping ? busy[a] : a;
     const Vec3 xi = x[i];
     const double ri = radius[i];
     int32_t at = start[i];
@@ -503,7 +509,7 @@ void System::BuildNear() {
   m.near_valid = true;
   ++m.near_builds;
   m.near_pairs = 0;
-  for (size_t i = 0; i < n; ++i) m.near_pairs += near_count[i];
+  for (int64_t a = 0; a < visits; ++a) m.near_pairs += near_count[sleeping ? busy[a] : a];
 }
 
 // Hertz-Mindlin forces of a batch of particle pairs: the same law as EvaluateContact

@@ -204,7 +204,12 @@ TEST(NearListTest, SameStateAsScanningTheWholeList) {
     // holds fewer pairs than the whole list.
     EXPECT_GT(near.stats.near_builds, 20);
     EXPECT_LT(near.stats.near_pairs, whole.stats.near_pairs);
-    EXPECT_EQ(whole.stats.near_pairs, whole.stats.pairs);
+    // (with sleeping the near list covers only the particles the force pass visits)
+    if (sleeping) {
+      EXPECT_LT(whole.stats.near_pairs, whole.stats.pairs);
+    } else {
+      EXPECT_EQ(whole.stats.near_pairs, whole.stats.pairs);
+    }
   }
 }
 
