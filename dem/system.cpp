@@ -82,6 +82,7 @@ struct System::Impl {
   // touch before some particle has moved near_skin / 2, which near_bound (the sum of dt max |v|
   // since it was made) bounds; the force pass scans only these pairs.
   std::vector<int32_t> near_k;      // list pair indices (num_pairs)
+  std::vector<int32_t> near_j;      // and their partners (num_pairs)
   std::vector<int32_t> near_count;  // near pairs of each particle (N)
   double near_skin = 0;             // [m]
   double near_bound = 0;            // [m]
@@ -473,6 +474,7 @@ void System::BuildNear() {
   Impl& m = *impl_;
   const size_t n = p_.size();
   m.near_k.resize(m.list.num_pairs());
+  m.near_j.resize(m.list.num_pairs());
   m.near_count.resize(n);
   const Vec3* x = p_.x.data();
   const double* radius = p_.radius.data();
@@ -481,6 +483,7 @@ void System::BuildNear() {
   const int32_t* start = m.list.start.data();
   const int32_t* partner = m.list.partner.data();
   int32_t* near_k = m.near_k.data();
+  int32_t* near_j = m.near_j.data();
   int32_t* near_count = m.near_count.data();
   uint8_t* touched = m.touching.data();
   const double s = m.near_skin;
@@ -498,7 +501,8 @@ void System::BuildNear() {
       const int32_t j = partner[k];
       const double reach = ri + radius[j] + s;
       if (Norm2(x[j] - xi) < reach * reach) {
-        near_k[at++] = k;
+        near_k[at] = k;
+        near_j[at++] = j;
       } else if (!sleeping || awake[i] || awake[j]) {
         touched[k] = 0;  // as the force pass would mark it: not touching
       }
@@ -612,7 +616,6 @@ void System::ComputeForces() {
   const double* inv_inertia = p_.inv_inertia.data();
   const int32_t* mat = p_.material.data();
   const int32_t* start = m.list.start.data();
-  const int32_t* partner = m.list.partner.data();
   Vec3* shear = m.shear.data();
   uint8_t* touched = m.touching.data();
   const int32_t* wall_start = m.wall_start.data();
@@ -624,6 +627,7 @@ void System::ComputeForces() {
   if (compact && !m.busy_valid) RefreshBusy();
   if (!m.near_valid) BuildNear();
   const int32_t* near_k = m.near_k.data();
+  const int32_t* near_j = m.near_j.data();
   const int32_t* near_count = m.near_count.data();
   const int32_t* busy = m.busy.data();
   const uint8_t* awake = p_.awake.data();
@@ -662,7 +666,7 @@ void System::ComputeForces() {
             // Only the near pairs can touch (see Impl::near_k).
             for (int32_t q = start[i]; q < start[i] + near_count[i]; ++q) {
               const int32_t k = near_k[q];
-              const int32_t j = partner[k];
+              const int32_t j = near_j[q];
               const double rsum = ri + radius[j];
               // Two sleepers do not interact; their pair keeps its history untouched.
               const bool live = awake_i || awake[j];
