@@ -299,8 +299,19 @@ void Permute(std::vector<T>& a, const std::vector<int32_t>& perm, std::vector<T>
 }  // namespace
 
 std::vector<ContactRecord> System::Contacts() const {
+  std::vector<ContactRecord> out = History();
+  std::sort(out.begin(), out.end(), [](const ContactRecord& l, const ContactRecord& r) {
+    return l.a != r.a ? l.a < r.a : l.b < r.b;
+  });
+  return out;
+}
+
+// The contact history in list order (pairs, walls, then pending records), unsorted: what
+// Rebuild carries over by persistent id.
+std::vector<ContactRecord> System::History() const {
   std::vector<ContactRecord> out;
   const Impl& m = *impl_;
+  out.reserve(static_cast<size_t>(m.contacts + m.wall_contacts) + m.pending.size());
   if (m.list_valid) {
     const size_t n_listed = m.list.start.empty() ? 0 : m.list.start.size() - 1;
     for (size_t i = 0; i < n_listed; ++i)
@@ -313,9 +324,6 @@ std::vector<ContactRecord> System::Contacts() const {
             {p_.id[m.wall_i[e]], -1 - static_cast<int64_t>(m.wall_k[e]), m.wall_shear[e]});
   }
   out.insert(out.end(), m.pending.begin(), m.pending.end());
-  std::sort(out.begin(), out.end(), [](const ContactRecord& l, const ContactRecord& r) {
-    return l.a != r.a ? l.a < r.a : l.b < r.b;
-  });
   return out;
 }
 
@@ -331,7 +339,7 @@ void System::Rebuild() {
   const size_t n = p_.size();
   // 1. Keep the history of the current contacts by persistent id.
   if (m.list_valid) {
-    std::vector<ContactRecord> records = Contacts();  // includes pending
+    std::vector<ContactRecord> records = History();  // includes pending
     m.pending.swap(records);
   }
   // 2. Grid sized for the present particles; reorder storage by cell, ties by persistent id.
