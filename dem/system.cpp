@@ -139,6 +139,7 @@ struct System::Impl {
   // wall candidates (the force pass skips the rest), in storage order, and where each slab's run
   // of them starts (slabs + 1). Refreshed when a particle wakes or falls asleep.
   std::vector<int32_t> busy, slab_busy;
+  std::vector<uint8_t> scratch_busy;  // RefreshBusy's marks (N)
   bool busy_valid = false;
   bool active_valid = false;
 
@@ -462,18 +463,36 @@ void System::Rebuild() {
 void System::RefreshBusy() {
   Impl& m = *impl_;
   const uint8_t* awake = p_.awake.data();
-  m.busy.clear();
-  m.slab_busy.assign(m.list.num_slabs() + 1, 0);
-  for (int sl = 0; sl < m.list.num_slabs(); ++sl) {
-    m.slab_busy[sl] = static_cast<int32_t>(m.busy.size());
-    for (int32_t i = m.list.slab_start[sl]; i < m.list.slab_start[sl + 1]; ++i) {
-      bool busy = awake[i] && m.wall_start[i + 1] > m.wall_start[i];
-      for (int32_t k = m.list.start[i]; k < m.list.start[i + 1] && !busy; ++k)
-        busy = awake[i] || awake[m.list.partner[k]];
-      if (busy) m.busy.push_back(i);
-    }
+  const int32_t* start = m.list.start.data();
+  const int32_t* partner = m.list.partner.data();
+  const int32_t* wall_start = m.wall_start.data();
+  const int ns = m.list.num_slabs();
+  const int64_t n = static_cast<int64_t>(p_.size());
+  // Mark, count per slab, then list in storage order (each step in parallel; the result depends
+  // on the data only).
+  std::vector<uint8_t>& flag = m.scratch_busy;
+  flag.resize(n);
+#pragma omp parallel for schedule(static) num_threads(num_threads_)
+  for (int64_t i = 0; i < n; ++i) {
+    bool busy = awake[i] && wall_start[i + 1] > wall_start[i];
+    for (int32_t k = start[i]; k < start[i + 1] && !busy; ++k) busy = awake[i] || awake[partner[k]];
+    flag[i] = busy;
   }
-  m.slab_busy[m.list.num_slabs()] = static_cast<int32_t>(m.busy.size());
+  m.slab_busy.assign(ns + 1, 0);
+#pragma omp parallel for schedule(static) num_threads(num_threads_)
+  for (int sl = 0; sl < ns; ++sl) {
+    int32_t count = 0;
+    for (int32_t i = m.list.slab_start[sl]; i < m.list.slab_start[sl + 1]; ++i) count += flag[i];
+    m.slab_busy[sl + 1] = count;
+  }
+  for (int sl = 0; sl < ns; ++sl) m.slab_busy[sl + 1] += m.slab_busy[sl];
+  m.busy.resize(m.slab_busy[ns]);
+#pragma omp parallel for schedule(static) num_threads(num_threads_)
+  for (int sl = 0; sl < ns; ++sl) {
+    int32_t at = m.slab_busy[sl];
+    for (int32_t i = m.list.slab_start[sl]; i < m.list.slab_start[sl + 1]; ++i)
+      if (flag[i]) m.busy[at++] = i;
+  }
   m.busy_valid = true;
   m.near_valid = false;  // the near list covers the busy particles only
 }
@@ -1203,13 +1222,20 @@ void System::UpdateSleep() {
   std::vector<uint8_t>& woken = m.scratch_wake;
   woken.assign(n, 0);
   const double wake2 = sc.wake_speed * sc.wake_speed;
-  for (size_t i = 0; i < n; ++i)
-    for (int32_t k = m.list.start[i]; k < m.list.start[i + 1]; ++k) {
-      if (!m.touching[k]) continue;
-      const int32_t j = m.list.partner[k];
-      if (!p_.awake[i] && p_.awake[j] && Norm2(p_.v[j]) > wake2) woken[i] = 1;
-      if (!p_.awake[j] && p_.awake[i] && Norm2(p_.v[i]) > wake2) woken[j] = 1;
-    }
+  // Even slabs, then odd ones: a pair's partner lies in its owner's slab or the next, so no two
+  // threads mark the same particle (and marking is an OR: the order does not matter).
+  const int ns = m.list.num_slabs();
+  for (int phase = 0; phase < 2; ++phase) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(num_threads_)
+    for (int sl = phase; sl < ns; sl += 2)
+      for (int32_t i = m.list.slab_start[sl]; i < m.list.slab_start[sl + 1]; ++i)
+        for (int32_t k = m.list.start[i]; k < m.list.start[i + 1]; ++k) {
+          if (!m.touching[k]) continue;
+          const int32_t j = m.list.partner[k];
+          if (!p_.awake[i] && p_.awake[j] && Norm2(p_.v[j]) > wake2) woken[i] = 1;
+          if (!p_.awake[j] && p_.awake[i] && Norm2(p_.v[i]) > wake2) woken[j] = 1;
+        }
+  }
   // Zones around the meshes, by distance from a particle's centre to the mesh surface: inner
   // (< wake_distance) and outer (< wake_distance + wake_margin). Triangles are tested only when
   // their bounding box, grown by the outer distance, holds the centre.
