@@ -180,7 +180,7 @@ System::System(MaterialTable materials, SystemConfig config)
     }
   plane_force_.assign(np, Vec3{});
   impl_->skin = config_.skin;
-  impl_->near_skin = config_.near_fraction * config_.skin;
+  impl_->near_skin = std::max(0.0, config_.near_fraction * config_.skin);  // never below contact
   num_threads_ = omp_get_max_threads();
 }
 
