@@ -185,8 +185,8 @@ int Main(int argc, char** argv) {
                    "Clump templates, comma separated (default: tetra1,tetra4,tetra8,tetra12)")
       ->delimiter(',');
   shape->add_option("--beds", shape_beds,
-                    "Folder of the beds: DIR/<template>.h5 is loaded if present, else made and "
-                    "saved there");
+                    "Folder of the beds: DIR/<template>.h5 is loaded if present and made from "
+                    "the same scene text, else made and saved there");
 
   CLI::App* bench = app.add_subcommand("bench", "Benchmarks");
   bench->require_subcommand(1);
