@@ -285,6 +285,7 @@ NeighborStats System::neighbor_stats() const {
   s.wall_contacts = impl_->wall_contacts;
   s.mesh_contacts = impl_->mesh_contacts;
   s.awake = config_.sleep.enabled ? impl_->awake : static_cast<int64_t>(p_.size());
+  s.max_overlap = impl_->max_overlap;
   return s;
 }
 

@@ -109,6 +109,8 @@ struct NeighborStats {
   int64_t wall_contacts = 0;  // particle-plane contacts after the last step
   int64_t mesh_contacts = 0;  // particle-mesh contacts after the last step (after deduplication)
   int64_t awake = 0;          // particles awake (integrated) at the last step
+  double max_overlap = 0;     // deepest overlap at the last step: particle-particle, -plane or
+                              // -mesh, / the smaller diameter [-]
 };
 
 // Wrench of the particles on a mesh during the last step, world frame.

@@ -241,7 +241,8 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
   out.SetAttribute("templates", list);
   struct Row {
     std::string name;
-    double spheres_per_clump, clumps, spheres, time_step, bed_wall, dig_wall, dig_cpu, peak, mean;
+    double spheres_per_clump, clumps, spheres, time_step, bed_wall, dig_wall, dig_cpu, peak, mean,
+        overlap;
   };
   std::vector<Row> rows;
   int status = 0;
@@ -299,7 +300,8 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
                   dig_wall,
                   dig_cpu,
                   summary.peak_force,
-                  summary.mean_force};
+                  summary.mean_force,
+                  summary.peak_overlap};
     out.SetAttribute("spheres_per_clump", row.spheres_per_clump);
     out.SetAttribute("clumps", clumps);
     out.SetAttribute("spheres", spheres);
@@ -311,14 +313,16 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
     out.SetAttribute("peak_force", summary.peak_force);
     out.SetAttribute("mean_force", summary.mean_force);
     out.SetAttribute("peak_torque", summary.peak_torque);
+    out.SetAttribute("peak_overlap", summary.peak_overlap);
     out.SetStateHash(system->StateHash());
     out.SetGroup("");
-    const double table[9] = {row.spheres_per_clump, clumps,  spheres,  row.time_step, row.bed_wall,
-                             row.dig_wall,          dig_cpu, row.peak, row.mean};
-    const char* columns[9] = {"spheres_per_clump", "clumps",     "spheres",
-                              "time_step",         "bed_wall_s", "dig_wall_s",
-                              "dig_cpu_s",         "peak_force", "mean_force"};
-    for (int k = 0; k < 9; ++k) out.AppendRow(std::string("/table/") + columns[k], &table[k], 1);
+    const double table[10] = {row.spheres_per_clump, clumps,   spheres,  row.time_step,
+                              row.bed_wall,          row.dig_wall, dig_cpu, row.peak,
+                              row.mean,              row.overlap};
+    const char* columns[10] = {"spheres_per_clump", "clumps",     "spheres",    "time_step",
+                               "bed_wall_s",        "dig_wall_s", "dig_cpu_s",  "peak_force",
+                               "mean_force",        "peak_overlap"};
+    for (int k = 0; k < 10; ++k) out.AppendRow(std::string("/table/") + columns[k], &table[k], 1);
     rows.push_back(row);
     out.Flush();
     if (status != 0) break;
@@ -329,12 +333,13 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
       "scoopsim: study shape (wrench in the world frame about the scoop CoM; mean after "
       "first contact):\n"
       "| template | spheres/clump | clumps | spheres | dt [s] | bed wall [s] | dig wall [s] "
-      "| dig CPU [s] | peak abs(F) [N] | mean abs(F) [N] |\n"
-      "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+      "| dig CPU [s] | peak abs(F) [N] | mean abs(F) [N] | peak overlap [%% of diameter] |\n"
+      "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   for (const Row& r : rows)
-    std::fprintf(stderr, "| %s | %.0f | %.0f | %.0f | %.3g | %.1f | %.1f | %.1f | %.4g | %.4g |\n",
+    std::fprintf(stderr,
+                 "| %s | %.0f | %.0f | %.0f | %.3g | %.1f | %.1f | %.1f | %.4g | %.4g | %.1f |\n",
                  r.name.c_str(), r.spheres_per_clump, r.clumps, r.spheres, r.time_step, r.bed_wall,
-                 r.dig_wall, r.dig_cpu, r.peak, r.mean);
+                 r.dig_wall, r.dig_cpu, r.peak, r.mean, 100.0 * r.overlap);
   std::fprintf(stderr, "scoopsim: wrote %s\n", options.output.c_str());
   return status;
 }

@@ -17,6 +17,7 @@ struct DigSummary {
   double peak_force = 0;               // max |F| [N]
   double mean_force = 0;               // mean |F| over the rows after first contact [N]
   double peak_torque = 0;              // max |T| [N m]
+  double peak_overlap = 0;             // deepest overlap / smaller diameter over all steps [-]
   std::vector<double> collected_mass;  // per pass [kg]
   int64_t particles = 0;               // at the start of the dig
   int64_t steps = 0;
@@ -49,10 +50,12 @@ int RunScene(const Scene& scene, const RunOptions& options);
 //   /<template>       attributes spheres_per_clump, clumps, spheres, time_step [s], bed_wall_s,
 //                     dig_wall_s (wall-clock), dig_cpu_s (all threads), steps, peak_force,
 //                     mean_force [N] (|F| in the world
-//                     frame; the mean after first contact), peak_torque [N m], state_hash, and the
-//                     dig's own (surface, scoop_mesh, ...)
+//                     frame; the mean after first contact), peak_torque [N m], peak_overlap
+//                     (deepest overlap / smaller diameter over the dig's steps), state_hash, and
+//                     the dig's own (surface, scoop_mesh, ...)
 //   /table/           one row per template, in order: spheres_per_clump, clumps, spheres,
-//                     time_step, bed_wall_s, dig_wall_s, dig_cpu_s, peak_force, mean_force (n)
+//                     time_step, bed_wall_s, dig_wall_s, dig_cpu_s, peak_force, mean_force,
+//                     peak_overlap (n)
 // The table is also printed on stderr. Beds are made (and settled) per template; with bed_dir,
 // DIR/<template>.h5 is loaded when it exists, else made and saved there.
 struct ShapeStudyOptions {

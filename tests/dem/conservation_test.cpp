@@ -105,6 +105,20 @@ SystemConfig TwoSphereConfig() {
   return c;
 }
 
+// The reported deepest overlap is delta / (2 min(r_i, r_j)): spheres of r and r/2 placed 3% of
+// the small one's diameter into each other, at rest, so the first step's force pass sees them
+// where they were put (relative 1e-9, round-off of the positions).
+TEST(HealthTest, ReportsDeepestOverlapAsFractionOfTheSmallerDiameter) {
+  const Interaction law{0.5, 0.5, 0.0};
+  System s(test::SnowAndSteel(law, law), TwoSphereConfig());
+  s.set_num_threads(1);
+  const double delta = 0.03 * kRadius;  // 3% of the small sphere's diameter (kRadius)
+  s.AddParticle({0, 0, 0}, {}, {}, kRadius, 0);
+  s.AddParticle({1.5 * kRadius - delta, 0, 0}, {}, {}, 0.5 * kRadius, 0);
+  ASSERT_TRUE(s.Step().ok());
+  EXPECT_NEAR(s.neighbor_stats().max_overlap, 0.03, 0.03 * 1e-9);
+}
+
 // Health checks (STYLE.md habit 8): each bad state is reported with the offending particle's
 // persistent id, the time and the scene knob to turn.
 TEST(HealthTest, ReportsOverlapSpeedAndNonFiniteState) {
