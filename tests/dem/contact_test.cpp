@@ -53,6 +53,31 @@ TEST(HertzTest, SphereSphereNormalForceMatchesClosedForm) {
   }
 }
 
+// Two material pairs in one batch of the force pass: sphere 0 (snow, first in storage on every
+// axis, so it owns both pairs) touches sphere 1 (snow) along +x and sphere 2 (steel) along +y.
+// Each force is 4/3 E* sqrt(R*) delta^(3/2) with its own pair's E*, within 0.1%.
+TEST(HertzTest, MixedMaterialPairsEachUseTheirOwnModulus) {
+  const Interaction law{0.88, 0.58, 0.05};
+  const double r = 1.75e-3, delta = 1e-3 * r;
+  System s(SnowAndSteel(law, law), StaticConfig());
+  s.AddParticle({0, 0, 0}, {}, {}, r, 0);
+  s.AddParticle({2 * r - delta, 0, 0}, {}, {}, r, 0);
+  s.AddParticle({0, 2 * r - delta, 0}, {}, {}, r, 1);
+  test::StepOk(s);
+  const double hertz = 4.0 / 3.0 * std::sqrt(0.5 * r) * std::pow(delta, 1.5);
+  const double snow_snow = hertz * EffectiveModulus(test::Snow(), test::Snow());
+  const double snow_steel = hertz * EffectiveModulus(test::Snow(), test::Steel());
+  ASSERT_GT(snow_steel, 1.5 * snow_snow);  // the two pairs are told apart
+  const Particles& p = s.particles();
+  for (size_t i = 0; i < 3; ++i) {
+    if (p.id[i] == 1) {
+      EXPECT_NEAR(p.f[i].x, snow_snow, 1e-3 * snow_snow);
+    } else if (p.id[i] == 2) {
+      EXPECT_NEAR(p.f[i].y, snow_steel, 1e-3 * snow_steel);
+    }
+  }
+}
+
 // Sphere-plane: R* = R, E* from the sphere and the wall material; within 0.1%.
 TEST(HertzTest, SpherePlaneNormalForceMatchesClosedForm) {
   const Interaction snow{0.88, 0.58, 0.05};
