@@ -41,6 +41,8 @@ void WriteBoxStl(const fs::path& path, double h, double t) {
   out << "endsolid tool\n";
 }
 
+constexpr double kMaxOverlap = 0.15;  // WriteScene's health.max_overlap
+
 std::string WriteScene(int count = 60, const std::string& name = "tiny_shape.yaml") {
   WriteBoxStl(TempDir() / "tool.stl", 0.01, 0.002);
   const fs::path path = TempDir() / name;
@@ -118,6 +120,7 @@ TEST(ShapeStudyTest, RunsEveryTemplateIntoOneFile) {
   ASSERT_EQ(rows, 4u);
   const std::vector<double> table_wall = ReadDoubles(file, "/table/dig_wall_s", &rows, &width);
   const std::vector<double> table_peak = ReadDoubles(file, "/table/peak_force", &rows, &width);
+  const std::vector<double> table_overlap = ReadDoubles(file, "/table/peak_overlap", &rows, &width);
   for (int k = 0; k < 4; ++k) {
     SCOPED_TRACE(names[k]);
     const std::string g = std::string("/") + names[k];
@@ -129,6 +132,10 @@ TEST(ShapeStudyTest, RunsEveryTemplateIntoOneFile) {
     EXPECT_GT(table_wall[k], 0.0);
     EXPECT_EQ(ReadAttribute(file, g, "dig_wall_s"), table_wall[k]);
     EXPECT_EQ(ReadAttribute(file, g, "peak_force"), table_peak[k]);
+    // A bed under gravity has contacts, so some overlap; below the scene's stop limit.
+    EXPECT_GT(table_overlap[k], 0.0);
+    EXPECT_LT(table_overlap[k], kMaxOverlap);
+    EXPECT_EQ(ReadAttribute(file, g, "peak_overlap"), table_overlap[k]);
     // The dig's rows, as a run's /scoop/.
     const std::vector<double> t = ReadDoubles(file, g + "/scoop/time", &rows, &width);
     EXPECT_GE(rows, 40u);  // 0.05 s at 1 ms
