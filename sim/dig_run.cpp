@@ -190,8 +190,9 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
       const double tau = system->time() + dt - t0;
       system->SetMeshMotion(k, MotionAt(plan, tau, heading, origin_shift));
       const dem::StepStatus st = system->Step();
-      particle_steps += system->neighbor_stats().awake;
-      summary.peak_overlap = std::max(summary.peak_overlap, system->neighbor_stats().max_overlap);
+      const dem::NeighborStats stats = system->neighbor_stats();
+      particle_steps += stats.awake;
+      summary.peak_overlap = std::max(summary.peak_overlap, stats.max_overlap);
       if (!st.ok()) {
         std::fprintf(stderr, "scoopsim: simulation unstable: %s\n", st.message.c_str());
         status = kExitUnstable;
