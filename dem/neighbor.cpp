@@ -124,14 +124,16 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
       cnt.push_back(static_cast<int32_t>(out.size() - before));
     }
   }
-  // Concatenate the slabs in order (deterministic), partners sorted within each particle.
+  // Concatenate the slabs in order (deterministic), partners sorted within each particle; each
+  // slab's part of the list starts at the sum of the slabs before it.
   start.resize(n + 1);
-  size_t total = 0;
-  for (int s = 0; s < num_slabs; ++s) total += slab_partner_[s].size();
-  partner.resize(total);
-  int32_t offset = 0;
+  std::vector<size_t> slab_offset(num_slabs + 1, 0);
+  for (int s = 0; s < num_slabs; ++s) slab_offset[s + 1] = slab_offset[s] + slab_partner_[s].size();
+  partner.resize(slab_offset[num_slabs]);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(num_threads)
   for (int s = 0; s < num_slabs; ++s) {
     size_t k = 0;
+    int32_t offset = static_cast<int32_t>(slab_offset[s]);
     for (int32_t i = slab_start[s]; i < slab_start[s + 1]; ++i) {
       start[i] = offset;
       const int32_t c = slab_count_[s][i - slab_start[s]];
@@ -142,7 +144,7 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
       offset += c;
     }
   }
-  start[n] = offset;
+  start[n] = static_cast<int32_t>(slab_offset[num_slabs]);
 }
 
 }  // namespace dem

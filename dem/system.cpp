@@ -147,12 +147,17 @@ struct System::Impl {
   size_t batch_capacity = 0;
 
   std::vector<ContactRecord> pending;  // history to apply at the next build
+  // The previous build's list and history, kept during a rebuild to carry the history over
+  // through the storage permutation.
+  std::vector<int32_t> old_start, old_partner, old_wall_start, old_wall_k;
+  std::vector<Vec3> old_shear, old_wall_shear;
+  std::vector<uint8_t> old_touching;
   std::vector<int32_t> perm, visit, index_of_id;
   std::vector<double> scratch_d;
   std::vector<int64_t> scratch_i64;
   std::vector<int32_t> scratch_i32;
   std::vector<Vec3> scratch_v;
-  std::vector<uint8_t> scratch_wake, scratch_zone;
+  std::vector<uint8_t> scratch_u8, scratch_wake, scratch_zone;
 
   // Per-slab reductions of the force pass (fixed slots, so results do not depend on threads).
   std::vector<double> slab_overlap;  // largest overlap / smaller diameter
@@ -292,9 +297,15 @@ NeighborStats System::neighbor_stats() const {
 namespace {
 
 template <typename T>
-void Permute(std::vector<T>& a, const std::vector<int32_t>& perm, std::vector<T>& scratch) {
+void Permute(std::vector<T>& a, const std::vector<int32_t>& perm, std::vector<T>& scratch,
+             int num_threads) {
   scratch.resize(a.size());
-  for (size_t i = 0; i < perm.size(); ++i) scratch[i] = a[perm[i]];
+  const int64_t n = static_cast<int64_t>(perm.size());
+  const int32_t* pm = perm.data();
+  const T* from = a.data();
+  T* to = scratch.data();
+#pragma omp parallel for schedule(static) num_threads(num_threads)
+  for (int64_t i = 0; i < n; ++i) to[i] = from[pm[i]];
   a.swap(scratch);
 }
 
@@ -339,26 +350,46 @@ void System::SetContacts(const std::vector<ContactRecord>& contacts) {
 void System::Rebuild() {
   Impl& m = *impl_;
   const size_t n = p_.size();
-  // 1. Keep the history of the current contacts by persistent id.
-  if (m.list_valid) {
-    std::vector<ContactRecord> records = History();  // includes pending
-    m.pending.swap(records);
+  const int nt = num_threads_;
+  // 1. Keep the present list and history: they are carried over to the new list through the
+  // storage permutation (list indices < n_old have a list; particles added since have none).
+  const bool carry = m.list_valid;
+  const int64_t n_old = carry && !m.list.start.empty() ? static_cast<int64_t>(m.list.start.size()) - 1 : 0;
+  if (carry) {
+    m.old_start.swap(m.list.start);
+    m.old_partner.swap(m.list.partner);
+    m.old_shear.swap(m.shear);
+    m.old_touching.swap(m.touching);
+    m.old_wall_start.swap(m.wall_start);
+    m.old_wall_k.swap(m.wall_k);
+    m.old_wall_shear.swap(m.wall_shear);
   }
   // 2. Grid sized for the present particles; reorder storage by cell, ties by persistent id.
   // The grid spans the particles' bounding box (within the domain), so that every slab holds
   // particles and the slabs share the work evenly.
   double r_max = 0;
-  Vec3 lo = config_.domain_max, hi = config_.domain_min;
-  for (size_t i = 0; i < n; ++i) {
-    r_max = std::max(r_max, p_.radius[i]);
-    const Vec3& xi = p_.x[i];
-    lo = {std::min(lo.x, xi.x), std::min(lo.y, xi.y), std::min(lo.z, xi.z)};
-    hi = {std::max(hi.x, xi.x), std::max(hi.y, xi.y), std::max(hi.z, xi.z)};
+  double lox = config_.domain_max.x, loy = config_.domain_max.y, loz = config_.domain_max.z;
+  double hix = config_.domain_min.x, hiy = config_.domain_min.y, hiz = config_.domain_min.z;
+  {
+    const Vec3* xs = p_.x.data();
+    const double* rs = p_.radius.data();
+    const int64_t nn = static_cast<int64_t>(n);
+#pragma omp parallel for schedule(static) num_threads(nt) \
+    reduction(max : r_max, hix, hiy, hiz) reduction(min : lox, loy, loz)
+    for (int64_t i = 0; i < nn; ++i) {
+      r_max = std::max(r_max, rs[i]);
+      lox = std::min(lox, xs[i].x);
+      loy = std::min(loy, xs[i].y);
+      loz = std::min(loz, xs[i].z);
+      hix = std::max(hix, xs[i].x);
+      hiy = std::max(hiy, xs[i].y);
+      hiz = std::max(hiz, xs[i].z);
+    }
   }
-  lo = {std::max(lo.x, config_.domain_min.x), std::max(lo.y, config_.domain_min.y),
-        std::max(lo.z, config_.domain_min.z)};
-  hi = {std::min(hi.x, config_.domain_max.x), std::min(hi.y, config_.domain_max.y),
-        std::min(hi.z, config_.domain_max.z)};
+  Vec3 lo{std::max(lox, config_.domain_min.x), std::max(loy, config_.domain_min.y),
+          std::max(loz, config_.domain_min.z)};
+  Vec3 hi{std::min(hix, config_.domain_max.x), std::min(hiy, config_.domain_max.y),
+          std::min(hiz, config_.domain_max.z)};
   if (!(hi.x > lo.x && hi.y > lo.y && hi.z > lo.z)) {
     lo = config_.domain_min;
     hi = config_.domain_max;
@@ -370,22 +401,18 @@ void System::Rebuild() {
   for (int64_t id = 0; id < next_id_; ++id)
     if (m.index_of_id[id] >= 0) m.visit.push_back(m.index_of_id[id]);
   m.list.ComputeOrder(p_.x.data(), m.visit, &m.perm);
-  Permute(p_.id, m.perm, m.scratch_i64);
-  Permute(p_.x, m.perm, m.scratch_v);
-  Permute(p_.v, m.perm, m.scratch_v);
-  Permute(p_.w, m.perm, m.scratch_v);
-  Permute(p_.f, m.perm, m.scratch_v);
-  Permute(p_.t, m.perm, m.scratch_v);
-  Permute(p_.radius, m.perm, m.scratch_d);
-  Permute(p_.mass, m.perm, m.scratch_d);
-  Permute(p_.inv_mass, m.perm, m.scratch_d);
-  Permute(p_.inv_inertia, m.perm, m.scratch_d);
-  Permute(p_.material, m.perm, m.scratch_i32);
-  {
-    std::vector<uint8_t> a(n);
-    for (size_t i = 0; i < n; ++i) a[i] = p_.awake[m.perm[i]];
-    p_.awake.swap(a);
-  }
+  Permute(p_.id, m.perm, m.scratch_i64, nt);
+  Permute(p_.x, m.perm, m.scratch_v, nt);
+  Permute(p_.v, m.perm, m.scratch_v, nt);
+  Permute(p_.w, m.perm, m.scratch_v, nt);
+  Permute(p_.f, m.perm, m.scratch_v, nt);
+  Permute(p_.t, m.perm, m.scratch_v, nt);
+  Permute(p_.radius, m.perm, m.scratch_d, nt);
+  Permute(p_.mass, m.perm, m.scratch_d, nt);
+  Permute(p_.inv_mass, m.perm, m.scratch_d, nt);
+  Permute(p_.inv_inertia, m.perm, m.scratch_d, nt);
+  Permute(p_.material, m.perm, m.scratch_i32, nt);
+  Permute(p_.awake, m.perm, m.scratch_u8, nt);
   for (size_t i = 0; i < n; ++i) m.index_of_id[p_.id[i]] = static_cast<int32_t>(i);
   // Mesh contact history follows its particles; candidates are found again at the next step.
   for (Impl::MeshState& ms : m.meshes) {
@@ -406,29 +433,87 @@ void System::Rebuild() {
   // With sleeping, the pairs of two sleepers stay listed (the force pass skips them and keeps
   // their history), so that a particle that wakes needs no rebuild: its pairs are already there.
   const int32_t* clump_of = clumps_.Reindex(p_, next_id_);  // no pairs within a clump
-  m.list.Build(p_.x.data(), p_.radius.data(), n, m.skin, num_threads_, clump_of);
-  m.shear.assign(m.list.num_pairs(), Vec3{});
-  m.touching.assign(m.list.num_pairs(), 0);
+  m.list.Build(p_.x.data(), p_.radius.data(), n, m.skin, nt, clump_of);
+  const int64_t num_pairs = static_cast<int64_t>(m.list.num_pairs());
+  m.shear.resize(num_pairs);
+  m.touching.resize(num_pairs);
   int32_t longest = 0;
   for (size_t i = 0; i < n; ++i) longest = std::max(longest, m.list.start[i + 1] - m.list.start[i]);
   m.batch_capacity = std::max<size_t>(kBatchContacts, 2 * static_cast<size_t>(longest));
-  m.wall_i.clear();
-  m.wall_k.clear();
+  const int np = static_cast<int>(config_.planes.size());
+  const Plane* planes = config_.planes.data();
+  const Vec3* x = p_.x.data();
+  const double* radius = p_.radius.data();
+  const double skin = m.skin;
   m.wall_start.resize(n + 1);
-  for (size_t i = 0; i < n; ++i) {
-    m.wall_start[i] = static_cast<int32_t>(m.wall_i.size());
-    for (size_t k = 0; k < config_.planes.size(); ++k) {
-      const Plane& pl = config_.planes[k];
-      if (Dot(p_.x[i] - pl.point, pl.normal) < p_.radius[i] + m.skin) {
-        m.wall_i.push_back(static_cast<int32_t>(i));
-        m.wall_k.push_back(static_cast<int32_t>(k));
+  int32_t* wall_start = m.wall_start.data();
+  const int64_t nn = static_cast<int64_t>(n);
+#pragma omp parallel for schedule(static) num_threads(nt)
+  for (int64_t i = 0; i < nn; ++i) {
+    int32_t count = 0;
+    for (int k = 0; k < np; ++k)
+      count += Dot(x[i] - planes[k].point, planes[k].normal) < radius[i] + skin;
+    wall_start[i + 1] = count;
+  }
+  wall_start[0] = 0;
+  for (int64_t i = 0; i < nn; ++i) wall_start[i + 1] += wall_start[i];
+  m.wall_i.resize(wall_start[n]);
+  m.wall_k.resize(wall_start[n]);
+  m.wall_shear.resize(wall_start[n]);
+
+  // 4. Carry the history over: a new pair (i, j) was the old pair of perm[i] and perm[j], owned
+  // by the smaller of the two (its shear flips sign if the owner changed). Only pairs that
+  // touched with a nonzero spring carry anything; every other pair starts afresh.
+  {
+    const int32_t* start = m.list.start.data();
+    const int32_t* partner = m.list.partner.data();
+    const int32_t* perm = m.perm.data();
+    const int32_t* o_start = m.old_start.data();
+    const int32_t* o_partner = m.old_partner.data();
+    const Vec3* o_shear = m.old_shear.data();
+    const uint8_t* o_touching = m.old_touching.data();
+    const int32_t* o_wall_start = m.old_wall_start.data();
+    const int32_t* o_wall_k = m.old_wall_k.data();
+    const Vec3* o_wall_shear = m.old_wall_shear.data();
+    Vec3* shear = m.shear.data();
+    uint8_t* touching = m.touching.data();
+    int32_t* wall_i = m.wall_i.data();
+    int32_t* wall_k = m.wall_k.data();
+    Vec3* wall_shear = m.wall_shear.data();
+#pragma omp parallel for schedule(static) num_threads(nt)
+    for (int64_t i = 0; i < nn; ++i) {
+      const int32_t oi = perm[i];
+      for (int32_t k = start[i]; k < start[i + 1]; ++k) {
+        shear[k] = Vec3{};
+        touching[k] = 0;
+        if (!carry) continue;
+        const int32_t oj = perm[partner[k]];
+        const int32_t owner = std::min(oi, oj), other = std::max(oi, oj);
+        if (owner >= n_old) continue;
+        for (int32_t q = o_start[owner]; q < o_start[owner + 1]; ++q) {
+          if (o_partner[q] != other) continue;
+          if (o_touching[q] && Norm2(o_shear[q]) > 0.0) {
+            shear[k] = owner == oi ? o_shear[q] : -o_shear[q];
+            touching[k] = 1;
+          }
+          break;
+        }
+      }
+      int32_t e = wall_start[i];
+      for (int k = 0; k < np; ++k) {
+        if (!(Dot(x[i] - planes[k].point, planes[k].normal) < radius[i] + skin)) continue;
+        wall_i[e] = static_cast<int32_t>(i);
+        wall_k[e] = k;
+        wall_shear[e] = Vec3{};
+        if (carry && oi < n_old)
+          for (int32_t q = o_wall_start[oi]; q < o_wall_start[oi + 1]; ++q)
+            if (o_wall_k[q] == k && Norm2(o_wall_shear[q]) > 0.0) wall_shear[e] = o_wall_shear[q];
+        ++e;
       }
     }
   }
-  m.wall_start[n] = static_cast<int32_t>(m.wall_i.size());
-  m.wall_shear.assign(m.wall_i.size(), Vec3{});
 
-  // 4. Put the kept history back on the new entries (sign flips if the pair's owner changed).
+  // 5. Put the pending history (a restored state, removed particles) on the new entries.
   for (const ContactRecord& c : m.pending) {
     if (c.a < 0 || c.a >= next_id_) continue;
     const int32_t ia = m.index_of_id[c.a];
@@ -450,7 +535,12 @@ void System::Rebuild() {
     }
   }
   m.pending.clear();
-  m.x_build = p_.x;
+  m.x_build.resize(n);
+  {
+    Vec3* xb = m.x_build.data();
+#pragma omp parallel for schedule(static) num_threads(nt)
+    for (int64_t i = 0; i < nn; ++i) xb[i] = x[i];
+  }
   m.drift_bound = 0;
   m.asleep_drift = 0;
   m.list_valid = true;
