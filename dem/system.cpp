@@ -311,17 +311,8 @@ void Permute(std::vector<T>& a, const std::vector<int32_t>& perm, std::vector<T>
 
 }  // namespace
 
+// The contact history (list pairs, walls, then pending records), sorted by (a, b).
 std::vector<ContactRecord> System::Contacts() const {
-  std::vector<ContactRecord> out = History();
-  std::sort(out.begin(), out.end(), [](const ContactRecord& l, const ContactRecord& r) {
-    return l.a != r.a ? l.a < r.a : l.b < r.b;
-  });
-  return out;
-}
-
-// The contact history in list order (pairs, walls, then pending records), unsorted: what
-// Rebuild carries over by persistent id.
-std::vector<ContactRecord> System::History() const {
   std::vector<ContactRecord> out;
   const Impl& m = *impl_;
   out.reserve(static_cast<size_t>(m.contacts + m.wall_contacts) + m.pending.size());
@@ -337,6 +328,9 @@ std::vector<ContactRecord> System::History() const {
             {p_.id[m.wall_i[e]], -1 - static_cast<int64_t>(m.wall_k[e]), m.wall_shear[e]});
   }
   out.insert(out.end(), m.pending.begin(), m.pending.end());
+  std::sort(out.begin(), out.end(), [](const ContactRecord& l, const ContactRecord& r) {
+    return l.a != r.a ? l.a < r.a : l.b < r.b;
+  });
   return out;
 }
 
@@ -354,7 +348,8 @@ void System::Rebuild() {
   // 1. Keep the present list and history: they are carried over to the new list through the
   // storage permutation (list indices < n_old have a list; particles added since have none).
   const bool carry = m.list_valid;
-  const int64_t n_old = carry && !m.list.start.empty() ? static_cast<int64_t>(m.list.start.size()) - 1 : 0;
+  const int64_t n_old =
+      carry && !m.list.start.empty() ? static_cast<int64_t>(m.list.start.size()) - 1 : 0;
   if (carry) {
     m.old_start.swap(m.list.start);
     m.old_partner.swap(m.list.partner);
@@ -445,14 +440,17 @@ void System::Rebuild() {
   const Vec3* x = p_.x.data();
   const double* radius = p_.radius.data();
   const double skin = m.skin;
+  // Particle i is a candidate of plane k (counted here, listed with its history below).
+  const auto near_plane = [&](int64_t i, int k) {
+    return Dot(x[i] - planes[k].point, planes[k].normal) < radius[i] + skin;
+  };
   m.wall_start.resize(n + 1);
   int32_t* wall_start = m.wall_start.data();
   const int64_t nn = static_cast<int64_t>(n);
 #pragma omp parallel for schedule(static) num_threads(nt)
   for (int64_t i = 0; i < nn; ++i) {
     int32_t count = 0;
-    for (int k = 0; k < np; ++k)
-      count += Dot(x[i] - planes[k].point, planes[k].normal) < radius[i] + skin;
+    for (int k = 0; k < np; ++k) count += near_plane(i, k);
     wall_start[i + 1] = count;
   }
   wall_start[0] = 0;
@@ -501,7 +499,7 @@ void System::Rebuild() {
       }
       int32_t e = wall_start[i];
       for (int k = 0; k < np; ++k) {
-        if (!(Dot(x[i] - planes[k].point, planes[k].normal) < radius[i] + skin)) continue;
+        if (!near_plane(i, k)) continue;
         wall_i[e] = static_cast<int32_t>(i);
         wall_k[e] = k;
         wall_shear[e] = Vec3{};

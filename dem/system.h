@@ -206,7 +206,6 @@ class System {
   void BuildMeshCandidates(int k);
   void UpdateSleep();    // sleep/wake decisions every sleep.check_every steps
   void RefreshActive();  // list the awake particles
-  std::vector<ContactRecord> History() const;  // Contacts(), unsorted
   void BuildNear();      // the pairs of the list that can touch before near_skin / 2 of motion
   void RefreshBusy();    // list the particles the force pass visits (sleeping on)
   struct ContactBatch;

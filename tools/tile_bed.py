@@ -33,7 +33,7 @@ def main():
     x0, y0, x1, y1 = a.box
     nx, ny = a.tiles
     if not (x1 > x0 and y1 > y0) or nx < 1 or ny < 1:
-        sys.exit(f"tile_bed.py: --box needs XMAX > XMIN and YMAX > YMIN, --tiles at least 1 1")
+        sys.exit("tile_bed.py: --box needs XMAX > XMIN and YMAX > YMIN, --tiles at least 1 1")
     lx, ly = x1 - x0, y1 - y0
     with h5py.File(a.bed, "r") as f:
         p = {k: f["particles/" + k][:] for k in
