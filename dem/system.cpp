@@ -22,7 +22,7 @@ constexpr size_t kBatchContacts = 64;  // ~40 arrays x 64 x 8 B: stays in L1
 // gathered so their forces can be computed in one vectorised loop (structure of arrays).
 struct System::ContactBatch {
   // Inputs, gathered by the scalar pass (structure of arrays, one entry per touching pair).
-  std::vector<int32_t> i, j, k;       // owner, partner, list entry
+  std::vector<int32_t> i, j, k;       // owner, partner, near slot
   std::vector<uint8_t> was;           // the pair touched at the last step
   std::vector<double> dx, dy, dz;     // x_j - x_i [m]
   std::vector<double> dvx, dvy, dvz;  // v_j - v_i [m/s]
@@ -76,14 +76,23 @@ struct System::Impl {
   double asleep_drift = 0;  // largest displacement since the last build of the particles asleep
                             // at the last RefreshActive (they move no more) [m]
   double skin = 0;
-  // The near list: of each particle's list pairs, those whose gap (distance - r_i - r_j) was
-  // below near_skin when it was made, kept in list order at the front of the particle's range
-  // (near_k[start[i] .. start[i] + near_count[i]] hold the list indices k). No other pair can
+  // The near list: of each visited particle's list pairs, those whose gap (distance - r_i - r_j)
+  // was below near_skin when it was made, in list order, packed slot after slot in visiting
+  // order (particle i owns slots near_off[i] .. near_off[i] + near_count[i]). No other pair can
   // touch before some particle has moved near_skin / 2, which near_bound (the sum of dt max |v|
-  // since it was made) bounds; the force pass scans only these pairs.
-  std::vector<int32_t> near_k;      // list pair indices (num_pairs)
-  std::vector<int32_t> near_j;      // and their partners (num_pairs)
+  // since it was made) bounds; the force pass scans only these pairs. While the list lives, the
+  // slots hold their pairs' history (near_shear, near_touch): the force pass then reads and
+  // writes it in one dense stream instead of scattered over the whole list. FlushNear puts it
+  // back into shear and touching, before anything else reads those or the list changes.
+  std::vector<int32_t> near_k;      // list pair index of each slot (num_pairs at most)
+  std::vector<int32_t> near_j;      // and its partner
+  std::vector<Vec3> near_shear;     // its tangential history [m]
+  std::vector<uint8_t> near_touch;  // whether it touched at the last force evaluation
+  std::vector<int32_t> near_off;    // first slot of each particle (N)
   std::vector<int32_t> near_count;  // near pairs of each particle (N)
+  std::vector<int32_t> scratch_near_k;  // BuildNear's first pass (num_pairs)
+  int64_t near_slots = 0;           // slots in use
+  bool near_loaded = false;         // the slots hold the history of their pairs (until Rebuild)
   double near_skin = 0;             // [m]
   double near_bound = 0;            // [m]
   bool near_valid = false;
@@ -311,9 +320,27 @@ void Permute(std::vector<T>& a, const std::vector<int32_t>& perm, std::vector<T>
 
 }  // namespace
 
+// Puts the near slots' history back into the list's arrays (see Impl::near_k).
+void System::FlushNear() const {
+  Impl& m = *impl_;
+  const int num_threads = num_threads_;
+  if (!m.near_loaded) return;
+  const int32_t* near_k = m.near_k.data();
+  const Vec3* near_shear = m.near_shear.data();
+  const uint8_t* near_touch = m.near_touch.data();
+  Vec3* shear = m.shear.data();
+  uint8_t* touching = m.touching.data();
+#pragma omp parallel for schedule(static) num_threads(num_threads)
+  for (int64_t q = 0; q < m.near_slots; ++q) {
+    shear[near_k[q]] = near_shear[q];
+    touching[near_k[q]] = near_touch[q];
+  }
+}
+
 // The contact history (list pairs, walls, then pending records), sorted by (a, b).
 std::vector<ContactRecord> System::Contacts() const {
   std::vector<ContactRecord> out;
+  FlushNear();  // moves history only: the state is unchanged
   const Impl& m = *impl_;
   out.reserve(static_cast<size_t>(m.contacts + m.wall_contacts) + m.pending.size());
   if (m.list_valid) {
@@ -348,6 +375,8 @@ void System::Rebuild() {
   // 1. Keep the present list and history: they are carried over to the new list through the
   // storage permutation (list indices < n_old have a list; particles added since have none).
   const bool carry = m.list_valid;
+  if (carry) FlushNear();
+  m.near_loaded = false;
   const int64_t n_old =
       carry && !m.list.start.empty() ? static_cast<int64_t>(m.list.start.size()) - 1 : 0;
   if (carry) {
@@ -588,48 +617,82 @@ void System::RefreshBusy() {
 
 void System::BuildNear() {
   Impl& m = *impl_;
+  FlushNear();  // the old slots' history first: the new slots take it from the list's arrays
   const size_t n = p_.size();
-  m.near_k.resize(m.list.num_pairs());
-  m.near_j.resize(m.list.num_pairs());
+  m.scratch_near_k.resize(m.list.num_pairs());
   m.near_count.resize(n);
+  m.near_off.resize(n);
   const Vec3* x = p_.x.data();
   const double* radius = p_.radius.data();
   const uint8_t* awake = p_.awake.data();
   const bool sleeping = config_.sleep.enabled;
   const int32_t* start = m.list.start.data();
   const int32_t* partner = m.list.partner.data();
-  int32_t* near_k = m.near_k.data();
-  int32_t* near_j = m.near_j.data();
+  int32_t* sparse_k = m.scratch_near_k.data();
   int32_t* near_count = m.near_count.data();
+  int32_t* near_off = m.near_off.data();
   uint8_t* touched = m.touching.data();
   const double s = m.near_skin;
   // With sleeping, only the particles the force pass visits (RefreshBusy makes the list again
   // when that set changes).
   const int32_t* busy = m.busy.data();
   const int64_t visits = sleeping ? static_cast<int64_t>(m.busy.size()) : static_cast<int64_t>(n);
+  // 1. The near pairs of each particle, at the front of its list range.
 #pragma omp parallel for schedule(static) num_threads(num_threads_)
   for (int64_t a = 0; a < visits; ++a) {
     const int64_t i = sleeping ? busy[a] : a;
     const Vec3 xi = x[i];
     const double ri = radius[i];
+    const bool awake_i = !sleeping || awake[i];
     int32_t at = start[i];
     for (int32_t k = start[i]; k < start[i + 1]; ++k) {
       const int32_t j = partner[k];
+      // Two sleepers do not interact (the force pass would skip their pair and keep its
+      // history), so a sleeper lists only its awake partners; a wake refreshes this list.
+      if (!awake_i && !awake[j]) continue;
       const double reach = ri + radius[j] + s;
       if (Norm2(x[j] - xi) < reach * reach) {
-        near_k[at] = k;
-        near_j[at++] = j;
-      } else if (!sleeping || awake[i] || awake[j]) {
+        sparse_k[at++] = k;
+      } else {
         touched[k] = 0;  // as the force pass would mark it: not touching
       }
     }
     near_count[i] = at - start[i];
   }
+  // 2. Pack them slot after slot in visiting order, each with its pair's history.
+  int64_t slots = 0;
+  for (int64_t a = 0; a < visits; ++a) {
+    const int64_t i = sleeping ? busy[a] : a;
+    near_off[i] = static_cast<int32_t>(slots);
+    slots += near_count[i];
+  }
+  m.near_k.resize(slots);
+  m.near_j.resize(slots);
+  m.near_shear.resize(slots);
+  m.near_touch.resize(slots);
+  int32_t* near_k = m.near_k.data();
+  int32_t* near_j = m.near_j.data();
+  Vec3* near_shear = m.near_shear.data();
+  uint8_t* near_touch = m.near_touch.data();
+  const Vec3* shear = m.shear.data();
+#pragma omp parallel for schedule(static) num_threads(num_threads_)
+  for (int64_t a = 0; a < visits; ++a) {
+    const int64_t i = sleeping ? busy[a] : a;
+    for (int32_t c = 0; c < near_count[i]; ++c) {
+      const int32_t k = sparse_k[start[i] + c];
+      const int32_t q = near_off[i] + c;
+      near_k[q] = k;
+      near_j[q] = partner[k];
+      near_shear[q] = shear[k];
+      near_touch[q] = touched[k];
+    }
+  }
+  m.near_slots = slots;
+  m.near_loaded = true;
   m.near_bound = 0;
   m.near_valid = true;
   ++m.near_builds;
-  m.near_pairs = 0;
-  for (int64_t a = 0; a < visits; ++a) m.near_pairs += near_count[sleeping ? busy[a] : a];
+  m.near_pairs = slots;
 }
 
 // Hertz-Mindlin forces of a batch of particle pairs: the same law as EvaluateContact
@@ -731,9 +794,6 @@ void System::ComputeForces() {
   const double* inv_mass = p_.inv_mass.data();
   const double* inv_inertia = p_.inv_inertia.data();
   const int32_t* mat = p_.material.data();
-  const int32_t* start = m.list.start.data();
-  Vec3* shear = m.shear.data();
-  uint8_t* touched = m.touching.data();
   const int32_t* wall_start = m.wall_start.data();
   const int32_t* wall_k = m.wall_k.data();
   Vec3* wall_shear = m.wall_shear.data();
@@ -742,9 +802,11 @@ void System::ComputeForces() {
   const bool compact = config_.sleep.enabled;
   if (compact && !m.busy_valid) RefreshBusy();
   if (!m.near_valid) BuildNear();
-  const int32_t* near_k = m.near_k.data();
   const int32_t* near_j = m.near_j.data();
+  const int32_t* near_off = m.near_off.data();
   const int32_t* near_count = m.near_count.data();
+  Vec3* shear = m.near_shear.data();       // the near slots hold the history (Impl::near_k)
+  uint8_t* touched = m.near_touch.data();
   const int32_t* busy = m.busy.data();
   const uint8_t* awake = p_.awake.data();
   if (m.batches.size() < static_cast<size_t>(num_threads_)) m.batches.resize(num_threads_);
@@ -780,8 +842,7 @@ void System::ComputeForces() {
             const double ri = radius[i];
             const bool awake_i = !compact || awake[i];
             // Only the near pairs can touch (see Impl::near_k).
-            for (int32_t q = start[i]; q < start[i] + near_count[i]; ++q) {
-              const int32_t k = near_k[q];
+            for (int32_t q = near_off[i]; q < near_off[i] + near_count[i]; ++q) {
               const int32_t j = near_j[q];
               const double rsum = ri + radius[j];
               // Two sleepers do not interact; their pair keeps its history untouched.
@@ -789,9 +850,9 @@ void System::ComputeForces() {
               const bool contact = live && Norm2(x[j] - xi) < rsum * rsum;
               batch.i[nb] = i;
               batch.j[nb] = j;
-              batch.k[nb] = k;
-              batch.was[nb] = touched[k];
-              touched[k] = live ? contact : touched[k];
+              batch.k[nb] = q;
+              batch.was[nb] = touched[q];
+              touched[q] = live ? contact : touched[q];
               nb += contact;
             }
           }
@@ -1308,6 +1369,7 @@ void System::UpdateSleep() {
   const SleepConfig& sc = config_.sleep;
   const size_t n = p_.size();
   if (!m.list_valid) return;
+  FlushNear();  // the wake test reads touching
   std::vector<uint8_t>& woken = m.scratch_wake;
   woken.assign(n, 0);
   const double wake2 = sc.wake_speed * sc.wake_speed;
