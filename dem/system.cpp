@@ -840,19 +840,17 @@ void System::ComputeForces() {
             if (nb + static_cast<size_t>(near_count[i]) > m.batch_capacity) break;
             const Vec3 xi = x[i];
             const double ri = radius[i];
-            const bool awake_i = !compact || awake[i];
-            // Only the near pairs can touch (see Impl::near_k).
+            // Only the near pairs can touch (see Impl::near_k); none joins two sleepers (the
+            // near list is made again whenever a particle wakes or falls asleep).
             for (int32_t q = near_off[i]; q < near_off[i] + near_count[i]; ++q) {
               const int32_t j = near_j[q];
               const double rsum = ri + radius[j];
-              // Two sleepers do not interact; their pair keeps its history untouched.
-              const bool live = awake_i || awake[j];
-              const bool contact = live && Norm2(x[j] - xi) < rsum * rsum;
+              const bool contact = Norm2(x[j] - xi) < rsum * rsum;
               batch.i[nb] = i;
               batch.j[nb] = j;
               batch.k[nb] = q;
               batch.was[nb] = touched[q];
-              touched[q] = live ? contact : touched[q];
+              touched[q] = contact;
               nb += contact;
             }
           }
@@ -1373,19 +1371,23 @@ void System::UpdateSleep() {
   std::vector<uint8_t>& woken = m.scratch_wake;
   woken.assign(n, 0);
   const double wake2 = sc.wake_speed * sc.wake_speed;
+  // Only a pair with an awake end can wake its other end, and its owner is busy (RefreshBusy).
   // Even slabs, then odd ones: a pair's partner lies in its owner's slab or the next, so no two
   // threads mark the same particle (and marking is an OR: the order does not matter).
+  if (!m.busy_valid) RefreshBusy();
   const int ns = m.list.num_slabs();
   for (int phase = 0; phase < 2; ++phase) {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(num_threads_)
     for (int sl = phase; sl < ns; sl += 2)
-      for (int32_t i = m.list.slab_start[sl]; i < m.list.slab_start[sl + 1]; ++i)
+      for (int32_t a = m.slab_busy[sl]; a < m.slab_busy[sl + 1]; ++a) {
+        const int32_t i = m.busy[a];
         for (int32_t k = m.list.start[i]; k < m.list.start[i + 1]; ++k) {
           if (!m.touching[k]) continue;
           const int32_t j = m.list.partner[k];
           if (!p_.awake[i] && p_.awake[j] && Norm2(p_.v[j]) > wake2) woken[i] = 1;
           if (!p_.awake[j] && p_.awake[i] && Norm2(p_.v[i]) > wake2) woken[j] = 1;
         }
+      }
   }
   // Zones around the meshes, by distance from a particle's centre to the mesh surface: inner
   // (< wake_distance) and outer (< wake_distance + wake_margin). Triangles are tested only when
@@ -1418,12 +1420,16 @@ void System::UpdateSleep() {
     }
   }
   // Does a sleeper lie in an inner zone? Then every sleeper of the outer zones wakes.
-  bool batch = false;
-  for (size_t i = 0; i < n && !batch; ++i) batch = !p_.awake[i] && zone[i] == 2;
+  const int64_t nn = static_cast<int64_t>(n);
+  int batch = 0;
+#pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(| : batch)
+  for (int64_t i = 0; i < nn; ++i) batch |= !p_.awake[i] && zone[i] == 2;
   const double quiet2 = sc.speed * sc.speed;
-  bool woke = false;
+  int woke = 0, slept = 0;
   int64_t awake = 0;
-  for (size_t i = 0; i < n; ++i) {
+#pragma omp parallel for schedule(static) num_threads(num_threads_) \
+    reduction(| : woke, slept) reduction(+ : awake)
+  for (int64_t i = 0; i < nn; ++i) {
     const bool near = zone[i] != 0;
     uint8_t& a = p_.awake[i];
     if (a == 0) {
@@ -1431,7 +1437,7 @@ void System::UpdateSleep() {
         a = 1;
         p_.f[i] = Vec3{};  // at rest in equilibrium (its force was not kept while asleep)
         p_.t[i] = Vec3{};
-        woke = true;
+        woke = 1;
       }
     } else {
       const double r = p_.radius[i];
@@ -1442,8 +1448,7 @@ void System::UpdateSleep() {
         a = 0;
         p_.v[i] = Vec3{};
         p_.w[i] = Vec3{};
-        m.active_valid = false;
-        m.busy_valid = false;
+        slept = 1;
       } else {
         ++a;
       }
@@ -1451,7 +1456,7 @@ void System::UpdateSleep() {
     awake += a != 0;
   }
   m.awake = awake;
-  if (woke) {
+  if (woke || slept) {
     m.busy_valid = false;
     m.active_valid = false;
   }
@@ -1459,17 +1464,36 @@ void System::UpdateSleep() {
 
 void System::RefreshActive() {
   Impl& m = *impl_;
-  m.active.clear();
   // The rebuild test scans only the active particles: the sleepers' displacement since the build
   // (frozen while they sleep) is measured here, whoever put them to sleep.
   const bool built = m.list_valid && m.x_build.size() == p_.size();
+  const int64_t n = static_cast<int64_t>(p_.size());
+  const uint8_t* awake = p_.awake.data();
+  // Count per chunk, then fill each chunk's run in storage order (chunks: the result does not
+  // depend on the thread count).
+  const int64_t chunks = 64, per = (n + chunks - 1) / chunks;
+  std::vector<int64_t> at(chunks + 1, 0);
   double asleep2 = 0;
-  for (size_t i = 0; i < p_.size(); ++i) {
-    if (p_.awake[i]) {
-      m.active.push_back(static_cast<int32_t>(i));
-    } else if (built) {
-      asleep2 = std::max(asleep2, Norm2(p_.x[i] - m.x_build[i]));
+#pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : asleep2)
+  for (int64_t c = 0; c < chunks; ++c) {
+    int64_t count = 0;
+    for (int64_t i = c * per; i < std::min(n, (c + 1) * per); ++i) {
+      if (awake[i]) {
+        ++count;
+      } else if (built) {
+        asleep2 = std::max(asleep2, Norm2(p_.x[i] - m.x_build[i]));
+      }
     }
+    at[c + 1] = count;
+  }
+  for (int64_t c = 0; c < chunks; ++c) at[c + 1] += at[c];
+  m.active.resize(at[chunks]);
+  int32_t* active = m.active.data();
+#pragma omp parallel for schedule(static) num_threads(num_threads_)
+  for (int64_t c = 0; c < chunks; ++c) {
+    int64_t k = at[c];
+    for (int64_t i = c * per; i < std::min(n, (c + 1) * per); ++i)
+      if (awake[i]) active[k++] = static_cast<int32_t>(i);
   }
   m.asleep_drift = std::sqrt(asleep2);
   m.active_valid = true;
