@@ -463,6 +463,10 @@ void LoadBed(const std::string& path, dem::System* system) {
       in.Read<int64_t>("/contacts/b", H5T_INTEGER, H5T_NATIVE_INT64, m, 1);
   const std::vector<dem::Vec3> shear = in.ReadVectors("/contacts/shear", m);
   const double time = in.ReadRootDouble("time");
+  // Optional: which particles sleep (a mid-run state, e.g. bench/dig_state.py's).
+  std::vector<uint8_t> awake;
+  if (in.Exists("/particles/awake"))
+    awake = in.Read<uint8_t>("/particles/awake", H5T_INTEGER, H5T_NATIVE_UINT8, n, 1);
   const SavedClumps clumps = ReadClumps(in, ids, radius, names.size());
 
   for (int64_t k = 1; k < n; ++k) {
@@ -564,6 +568,11 @@ void LoadBed(const std::string& path, dem::System* system) {
     p.w[i] = w[it->second];
     p.f[i] = force[it->second];
     p.t[i] = torque[it->second];
+    if (!awake.empty() && awake[it->second] == 0) {
+      p.awake[i] = 0;  // asleep at rest, as dem::System puts a particle to sleep
+      p.v[i] = dem::Vec3{};
+      p.w[i] = dem::Vec3{};
+    }
   }
   system->Touch();
 

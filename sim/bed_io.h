@@ -11,6 +11,8 @@
 //                      which velocity Verlet's first half kick uses
 //   /materials/names   material names (string list, index = material id at save time)
 //   /contacts/         a, b int64 (M), shear (M x 3) [m]: System::Contacts(); b < 0 is plane -1-b
+//   Optional: /particles/awake uint8 (N): 0 for a particle that sleeps (dem::SleepConfig; it
+//   is loaded at rest), else awake; SaveBed does not write it (a settled bed is all awake)
 //   Only when the bed has clumps (dem/clump.h; a sphere bed's file has neither group):
 //   /clump_templates/  names (T strings), sphere_count int32 (T), spheres (S_total x 4): x y z r
 //                      of each template's spheres in its template frame [m], template after

@@ -134,6 +134,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
     std::fprintf(stderr, "scoopsim: wrote %s\n", out.path().c_str());
     return status;
   }
+  system->set_sleep(scene.sleep);  // the scene's `sleep` (a dig sets it in RunDig)
   const int num_planes = static_cast<int>(system->config().planes.size());
   auto record = [&] {
     const double t = system->time();
@@ -201,6 +202,11 @@ int RunScene(const Scene& scene, const RunOptions& options) {
         exit_status = kExitStopped;
         break;
       }
+    }
+    if (options.stop_after > 0 && system->time() - t_start >= options.stop_after) {
+      std::fprintf(stderr, "scoopsim: stopped at t = %.6g s (--stop-after); output closed\n",
+                   system->time());
+      break;
     }
   }
   progress.Finish(system->time() - t_start, (system->step_count() - step0) * n);
@@ -393,6 +399,46 @@ int BenchSettle(const BenchSettleOptions& options) {
       n * static_cast<double>(options.steps) / wall,
       (2.0 * ns.contacts + ns.wall_contacts) / std::max<int64_t>(n, 1),
       static_cast<long long>(ns.builds), PeakRssMb(),
+      static_cast<unsigned long long>(system->StateHash()));
+  return 0;
+}
+
+int BenchStep(const BenchStepOptions& options) {
+  const Scene scene = LoadScene(options.scene);
+  if (scene.bed.file.empty()) throw InputError(options.scene + ": bed.file: expected a saved bed");
+  auto system = MakeSystem(scene, options.threads);
+  LoadBed(scene.bed.file, system.get());
+  system->set_sleep(scene.sleep);
+  system->Canonicalize();
+  auto run = [&](int64_t steps, int64_t* awake_sum) {
+    for (int64_t k = 0; k < steps; ++k) {
+      const dem::StepStatus status = system->Step();
+      if (!status.ok()) {
+        ReportUnstable(status);
+        return false;
+      }
+      *awake_sum += system->neighbor_stats().awake;
+    }
+    return true;
+  };
+  int64_t awake = 0;
+  if (!run(options.warm, &awake)) return kExitUnstable;
+  const dem::NeighborStats before = system->neighbor_stats();
+  awake = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!run(options.steps, &awake)) return kExitUnstable;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const dem::NeighborStats ns = system->neighbor_stats();
+  const double steps = static_cast<double>(std::max<int64_t>(options.steps, 1));
+  std::printf(
+      "{\"bench\":\"step\",\"particles\":%zu,\"awake_per_step\":%.0f,\"steps\":%lld,"
+      "\"threads\":%d,\"wall_s\":%.4f,\"ms_per_step\":%.4f,\"awake_particle_steps_per_s\":%.4g,"
+      "\"neighbor_builds\":%lld,\"near_builds\":%lld,\"peak_rss_mb\":%.1f,"
+      "\"state_hash\":\"%016llx\"}\n",
+      system->particles().size(), awake / steps, static_cast<long long>(options.steps),
+      system->num_threads(), wall, 1e3 * wall / steps, awake / wall,
+      static_cast<long long>(ns.builds - before.builds),
+      static_cast<long long>(ns.near_builds - before.near_builds), PeakRssMb(),
       static_cast<unsigned long long>(system->StateHash()));
   return 0;
 }

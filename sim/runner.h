@@ -32,6 +32,7 @@ struct RunOptions {
   // (0 = at every output interval), from the main thread, with no OpenMP region active.
   FrameCallback on_frame;
   double frame_every = 0;             // [s]
+  double stop_after = 0;              // stop after this much simulated time [s] (0: run to the end)
   DigSummary* dig_summary = nullptr;  // filled by a dig run when set
 };
 
@@ -77,5 +78,17 @@ struct BenchSettleOptions {
 // `scoopsim bench settle`: prints one JSON line (particles, steps, threads, wall_s,
 // particle_steps_per_s, contacts_per_particle, peak_rss_mb, state_hash).
 int BenchSettle(const BenchSettleOptions& options);
+
+struct BenchStepOptions {
+  std::string scene;   // a scene with a bed file (its sleep state, when saved, is restored)
+  int64_t warm = 400;  // steps run before the timing (sleep checks settle, a rebuild or two)
+  int64_t steps = 1500;
+  int threads = 0;
+};
+// `scoopsim bench step SCENE`: the cost of the scene's step from its saved bed, scoop or not (the
+// mid-dig state of bench/dig_state.py: a full-scale pass's step without running up to it). Prints
+// one JSON line (particles, awake_per_step, steps, threads, wall_s, ms_per_step,
+// awake_particle_steps_per_s, neighbor_builds, near_builds, peak_rss_mb, state_hash).
+int BenchStep(const BenchStepOptions& options);
 
 }  // namespace sim

@@ -152,6 +152,11 @@ int Main(int argc, char** argv) {
   CLI::App* run = app.add_subcommand(
       "run", "Run a scene for its duration (loads bed.file, or makes the bed first)");
   run_args.AddTo(run, "out/run.h5");
+  double run_stop_after = 0;
+  run->add_option("--stop-after", run_stop_after,
+                  "Stop after this many simulated seconds, the output closed as on SIGINT "
+                  "(default: at the scene's end)")
+      ->check(CLI::PositiveNumber);
   FramesArgs run_frames;
   run_frames.AddTo(run, false, true);
 
@@ -204,6 +209,19 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, kMaxThreads));
   settle->add_flag("-q,--quiet", bench_quiet, "No progress output (the JSON line is kept)");
+  CLI::App* step = bench->add_subcommand(
+      "step", "Time a scene's step from its saved bed, e.g. a mid-dig state (one JSON line)");
+  sim::BenchStepOptions step_options;
+  step->add_option("SCENE", step_options.scene, "Scene file (YAML) with a bed file")->required();
+  step->add_option("--warm", step_options.warm, "Steps run before the timing")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{0}, int64_t{1000000000}));
+  step->add_option("--steps", step_options.steps, "Time steps to time")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{1000000000}));
+  step->add_option("--threads", step_options.threads, "Worker threads; 0 = all cores")
+      ->capture_default_str()
+      ->check(CLI::Range(0, kMaxThreads));
   CLI::App* bench_render = bench->add_subcommand(
       "render",
       "Frames per second of the renderer at 1280x720, PNG writing included (one JSON line)");
@@ -245,6 +263,7 @@ int Main(int argc, char** argv) {
       const sim::Scene scene = sim::LoadScene(run_args.scene);
       MakeParentDirectories(run_args.output);
       sim::RunOptions options = run_args.Options(scene);
+      options.stop_after = run_stop_after;
       std::unique_ptr<render::FrameSequence> frames;
       if (!run_frames.dir.empty()) {
         // Rendering happens inside the run loop's frame callback, between steps: the DEM's
@@ -289,6 +308,7 @@ int Main(int argc, char** argv) {
       return sim::RunShapeStudy(scene, options);
     }
     if (*settle) return sim::BenchSettle(bench_options);
+    if (*step) return sim::BenchStep(step_options);
     if (*bench_render) return render::BenchRender(render_bench);
   } catch (const sim::InputError& e) {
     std::fprintf(stderr, "scoopsim: %s\n", OneLine(e.what()).c_str());

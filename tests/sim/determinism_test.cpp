@@ -95,4 +95,51 @@ TEST(RunDeterminismTest, RunFromSavedBedEqualsRunThatPouredIt) {
   }
 }
 
+// `run --stop-after T` stops T simulated seconds into the run, the output closed as at the
+// scene's end (exit status 0; its time attribute is the bed's time plus T, to within a step),
+// and `bench step` times the same saved bed: one JSON line, the same state with 1 and 2 threads.
+double RootTime(const std::string& h5) {
+  const hid_t file = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  EXPECT_GE(file, 0) << h5;
+  const hid_t attr = H5Aopen(file, "time", H5P_DEFAULT);
+  double t = -1;
+  EXPECT_GE(H5Aread(attr, H5T_NATIVE_DOUBLE, &t), 0);
+  H5Aclose(attr);
+  H5Fclose(file);
+  return t;
+}
+
+std::string ReadAll(const fs::path& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+TEST(RunDeterminismTest, StopAfterAndBenchStepOnASavedBed) {
+  const std::string pour = WriteScene("pour_s.yaml", "");
+  const std::string bed = (TempDir() / "bed_s.h5").string();
+  ASSERT_EQ(Scoopsim("bed " + pour + " -o " + bed + " --threads 2"), 0);
+  const std::string scene = WriteScene("from_bed_s.yaml", bed);
+  const std::string whole = (TempDir() / "whole.h5").string();
+  const std::string part = (TempDir() / "part.h5").string();
+  ASSERT_EQ(Scoopsim("run " + scene + " -o " + whole + " --threads 2"), 0);
+  ASSERT_EQ(Scoopsim("run " + scene + " -o " + part + " --threads 2 --stop-after 0.004"), 0);
+  const double t_bed = RootTime(whole) - 0.01;  // the scene runs 0.01 s
+  // The step of this bed (0.2 t_R of 1.5 mm snow spheres) is under 10 us.
+  EXPECT_NEAR(RootTime(part) - t_bed, 0.004, 1e-5);
+
+  std::string json[2];
+  for (int threads : {1, 2}) {
+    const fs::path out = TempDir() / ("step_" + std::to_string(threads) + ".json");
+    ASSERT_EQ(scoopsim_test::RunScoopsim("bench step " + scene + " --warm 5 --steps 20 --threads " +
+                                         std::to_string(threads) + " > " + out.string()),
+              0);
+    json[threads - 1] = ReadAll(out);
+    EXPECT_NE(json[threads - 1].find("\"bench\":\"step\",\"particles\":600,"), std::string::npos)
+        << json[threads - 1];
+    EXPECT_NE(json[threads - 1].find("\"steps\":20,"), std::string::npos) << json[threads - 1];
+  }
+  auto hash = [](const std::string& j) { return j.substr(j.find("state_hash")); };
+  EXPECT_EQ(hash(json[0]), hash(json[1]));
+}
+
 }  // namespace

@@ -765,6 +765,66 @@ TEST_F(H5Test, BedLoadAppendsWithFreshIds) {
   ExpectSameVec(c[2].shear, dem::Vec3{1e-6, -2e-6, 3e-7});
 }
 
+// A bed with /particles/awake (bench/dig_state.py's mid-dig states) comes back with those
+// particles asleep, at rest (v = w = 0, as System puts a particle to sleep), and with sleeping on
+// a sleeper far from everything stays where it is, bit for bit, while the awake ones move; the
+// other fields load as they were saved. A flag array of the wrong length is refused naming it.
+TEST_F(H5Test, BedLoadRestoresSleepingParticles) {
+  const std::string path = Path("sleeping_bed.h5");
+  {
+    dem::System saved(OneMaterial(), SmallConfig());
+    FillSmallBed(&saved);
+    SaveBed(path, saved, "");
+    Handle file = OpenFile(path, H5F_ACC_RDWR);
+    Handle particles(H5Gopen2(file.get(), "/particles", H5P_DEFAULT), H5Gclose);
+    const uint8_t awake[3] = {1, 1, 0};  // particle 2 (0.03 m up, touching nothing) sleeps
+    h5::WriteArray(particles.get(), "awake", H5T_STD_U8LE, H5T_NATIVE_UINT8, awake, 3, 1);
+  }
+  dem::System loaded(OneMaterial(), SmallConfig());
+  LoadBed(path, &loaded);
+  dem::SleepConfig sleep;
+  sleep.enabled = true;
+  loaded.set_sleep(sleep);
+  const dem::Particles& p = loaded.particles();
+  ASSERT_EQ(p.size(), 3u);
+  dem::Vec3 x2;
+  for (size_t i = 0; i < p.size(); ++i) {
+    EXPECT_EQ(p.awake[i] != 0, p.id[i] != 2) << "id " << p.id[i];
+    if (p.id[i] == 2) {
+      ExpectSameVec(p.v[i], dem::Vec3{});
+      ExpectSameVec(p.w[i], dem::Vec3{});
+      x2 = p.x[i];
+    } else if (p.id[i] == 1) {
+      ExpectSameVec(p.v[i], dem::Vec3{0.0, 0.3, 0.0});  // as saved
+    }
+  }
+  EXPECT_EQ(loaded.awake_count(), 2);
+  for (int k = 0; k < 20; ++k) ASSERT_TRUE(loaded.Step().ok());
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (p.id[i] == 2) ExpectSameVec(p.x[i], x2);
+  }
+
+  const std::string broken = Path("bad_awake.h5");
+  fs::copy_file(path, broken);
+  {
+    Handle file = OpenFile(broken, H5F_ACC_RDWR);
+    ASSERT_GE(H5Ldelete(file.get(), "/particles/awake", H5P_DEFAULT), 0);
+    Handle particles(H5Gopen2(file.get(), "/particles", H5P_DEFAULT), H5Gclose);
+    const uint8_t awake[2] = {1, 0};
+    h5::WriteArray(particles.get(), "awake", H5T_STD_U8LE, H5T_NATIVE_UINT8, awake, 2, 1);
+  }
+  dem::System s(OneMaterial(), SmallConfig());
+  try {
+    LoadBed(broken, &s);
+    ADD_FAILURE() << "expected InputError for " << broken;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(broken), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/particles/awake"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("expected shape (3), got (2)"), std::string::npos)
+        << e.what();
+  }
+}
+
 // Each broken bed is refused with an InputError naming the file and the offending dataset:
 // missing file; a material the system lacks; a missing dataset; a dataset of the wrong shape.
 TEST_F(H5Test, BedLoadErrorsNameFileAndDataset) {
