@@ -152,7 +152,6 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   };
 
   const double t_end = system->time() + scene.duration;
-  const int64_t n = static_cast<int64_t>(system->particles().size());
   Progress progress("run", scene.duration, options.quiet);
   const double t_start = system->time();
   double next_record = system->time();
@@ -178,6 +177,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   maybe_frame();
 
   const int64_t step0 = system->step_count();
+  int64_t particle_steps = 0;  // of the awake particles (all of them without sleeping)
   while (system->time() < t_end - 0.5 * scene.time_step) {
     const dem::StepStatus status = system->Step();
     if (!status.ok()) {
@@ -185,6 +185,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
       exit_status = kExitUnstable;
       break;
     }
+    particle_steps += system->neighbor_stats().awake;
     const int64_t steps = system->step_count() - step0;
     if (system->time() >= next_record) {
       record();
@@ -195,7 +196,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
     maybe_frame();
     if (steps % 64 == 0) {
       out.MaybeFlush();
-      progress.Update(system->time() - t_start, steps * n);
+      progress.Update(system->time() - t_start, particle_steps);
       if (StopRequested()) {
         std::fprintf(stderr, "scoopsim: stopped by signal %d at t = %.6g s; output closed\n",
                      StopSignal(), system->time());
@@ -209,7 +210,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
       break;
     }
   }
-  progress.Finish(system->time() - t_start, (system->step_count() - step0) * n);
+  progress.Finish(system->time() - t_start, particle_steps);
   out.SetStateHash(system->StateHash());
   out.SetAttribute("time", system->time());
   out.Close();
