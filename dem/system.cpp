@@ -91,12 +91,11 @@ struct System::Impl {
   std::vector<int32_t> near_off;    // first slot of each particle (N)
   std::vector<int32_t> near_count;  // near pairs of each particle (N)
   std::vector<int32_t> scratch_near_k;  // BuildNear's first pass (num_pairs)
-  int64_t near_slots = 0;           // slots in use
   bool near_loaded = false;         // the slots hold the history of their pairs (until Rebuild)
   double near_skin = 0;             // [m]
   double near_bound = 0;            // [m]
   bool near_valid = false;
-  int64_t near_builds = 0, near_pairs = 0;
+  int64_t near_builds = 0, near_pairs = 0;  // near_pairs: the slots in use
   double cutoff_radius = 0;  // largest radius the grid was set up for [m]
   size_t grid_capacity = 0;  // particle count the grid was sized for
 
@@ -331,7 +330,7 @@ void System::FlushNear() const {
   Vec3* shear = m.shear.data();
   uint8_t* touching = m.touching.data();
 #pragma omp parallel for schedule(static) num_threads(num_threads)
-  for (int64_t q = 0; q < m.near_slots; ++q) {
+  for (int64_t q = 0; q < m.near_pairs; ++q) {
     shear[near_k[q]] = near_shear[q];
     touching[near_k[q]] = near_touch[q];
   }
@@ -687,7 +686,6 @@ void System::BuildNear() {
       near_touch[q] = touched[k];
     }
   }
-  m.near_slots = slots;
   m.near_loaded = true;
   m.near_bound = 0;
   m.near_valid = true;

@@ -149,7 +149,7 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
   // Frames: every frame_every seconds, by default 20 a simulated second.
   const double frame_every = options.frame_every > 0 ? options.frame_every : 0.05;
 
-  bool until_reached = false;  // RunOptions::stop_after
+  bool stopped_after = false;  // RunOptions::stop_after
   for (int pass = 1; pass <= dig.passes && status == 0; ++pass) {
     // Where the pass goes: the level scoop's lowest point at pass * bite below the surface.
     TrajectorySpec spec = dig.trajectory;
@@ -266,11 +266,11 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
       if (options.stop_after > 0 && system->time() - t_start >= options.stop_after) {
         std::fprintf(stderr, "scoopsim: stopped at t = %.6g s (--stop-after); output closed\n",
                      system->time());
-        until_reached = true;
+        stopped_after = true;
         break;
       }
     }
-    if (status != 0 || until_reached) break;
+    if (status != 0 || stopped_after) break;
     // Empty the scoop: the particles in its cavity are the sample of this pass.
     double mass = 0;
     const std::vector<int64_t> held =
