@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dem/grow.h"
+
 namespace dem {
 
 void NeighborList::SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n) {
@@ -49,15 +51,16 @@ int64_t NeighborList::CellKey(const Vec3& x, int c[3]) const {
 }
 
 void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit,
-                                std::vector<int32_t>* perm) {
-  const size_t n = visit.size();
+                                std::vector<int32_t>* perm, int num_threads) {
+  const int64_t n = static_cast<int64_t>(visit.size());
   std::vector<int64_t> key(n);
-  int c[3];
-  std::fill(count_.begin(), count_.end(), 0);
-  for (size_t i = 0; i < n; ++i) {
+#pragma omp parallel for schedule(static) num_threads(num_threads)
+  for (int64_t i = 0; i < n; ++i) {
+    int c[3];
     key[i] = CellKey(x[visit[i]], c);
-    ++count_[key[i]];
   }
+  std::fill(count_.begin(), count_.end(), 0);
+  for (int64_t i = 0; i < n; ++i) ++count_[key[i]];
   // Counting sort, stable in visit order.
   int32_t sum = 0;
   for (size_t k = 0; k < count_.size(); ++k) {
@@ -68,7 +71,7 @@ void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit
   perm->resize(n);
   key_.resize(n);
   std::vector<int32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-  for (size_t i = 0; i < n; ++i) {
+  for (int64_t i = 0; i < n; ++i) {
     const int32_t dst = fill[key[i]]++;
     (*perm)[dst] = visit[i];
     key_[dst] = key[i];
@@ -82,54 +85,66 @@ void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit
 void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double skin,
                          int num_threads, const int32_t* group) {
   const int num_slabs = n_[0];
+  const int n1 = n_[1], n2 = n_[2];
   slab_partner_.resize(num_slabs);
   slab_count_.resize(num_slabs);
-  // Forward half stencil: the 13 neighbour cells with a larger key, plus the own cell (j > i).
-  int stencil[14][3];
-  int ns = 0;
-  for (int da = 0; da <= 1; ++da)
-    for (int db = -1; db <= 1; ++db)
-      for (int dc = -1; dc <= 1; ++dc) {
-        if (da == 0 && (db < 0 || (db == 0 && dc < 0))) continue;
-        stencil[ns][0] = da;
-        stencil[ns][1] = db;
-        stencil[ns][2] = dc;
-        ++ns;
-      }
-
+  // Forward half stencil: the own cell (j > i) and the 13 neighbour cells with a larger key. In
+  // key order they are five runs of consecutive cells, each a contiguous range of particles:
+  // (0, 0, 0..1), (0, 1, -1..1), (1, -1, -1..1), (1, 0, -1..1), (1, 1, -1..1) in (slab, second,
+  // third) offsets. Visited in that order, each particle's partners come out ascending.
+  const int row_da[5] = {0, 0, 1, 1, 1}, row_db[5] = {0, 1, -1, 0, 1};
 #pragma omp parallel for schedule(dynamic, 1) num_threads(num_threads)
   for (int s = 0; s < num_slabs; ++s) {
     std::vector<int32_t>& out = slab_partner_[s];
     std::vector<int32_t>& cnt = slab_count_[s];
-    out.clear();
     cnt.clear();
-    for (int32_t i = slab_start[s]; i < slab_start[s + 1]; ++i) {
-      const int64_t key = key_[i];
-      const int c0 = static_cast<int>(key / (static_cast<int64_t>(n_[1]) * n_[2]));
-      const int c1 = static_cast<int>((key / n_[2]) % n_[1]);
-      const int c2 = static_cast<int>(key % n_[2]);
-      const size_t before = out.size();
-      for (int t = 0; t < ns; ++t) {
-        const int a = c0 + stencil[t][0], b = c1 + stencil[t][1], c = c2 + stencil[t][2];
-        if (a >= n_[0] || b < 0 || b >= n_[1] || c < 0 || c >= n_[2]) continue;
-        const int64_t cell = (static_cast<int64_t>(a) * n_[1] + b) * n_[2] + c;
-        const int32_t first = (t == 0) ? i + 1 : cell_start_[cell];
-        for (int32_t j = first; j < cell_start_[cell + 1]; ++j) {
-          const double reach = radius[i] + radius[j] + skin;
-          if (Norm2(x[j] - x[i]) < reach * reach &&
-              (group == nullptr || group[i] < 0 || group[i] != group[j]))
-            out.push_back(j);
+    size_t used = 0;
+    for (int c1 = 0; c1 < n1; ++c1)
+      for (int c2 = 0; c2 < n2; ++c2) {
+        const int64_t cell = (static_cast<int64_t>(s) * n1 + c1) * n2 + c2;
+        const int32_t first = cell_start_[cell], last = cell_start_[cell + 1];
+        if (first == last) continue;
+        int32_t lo[5], hi[5];
+        int runs = 0;
+        for (int r = 0; r < 5; ++r) {
+          const int a = s + row_da[r], b = c1 + row_db[r];
+          if (a >= n_[0] || b < 0 || b >= n1) continue;
+          const int64_t row = (static_cast<int64_t>(a) * n1 + b) * n2;
+          const int c_lo = r == 0 ? c2 : std::max(c2 - 1, 0), c_hi = std::min(c2 + 1, n2 - 1);
+          lo[runs] = cell_start_[row + c_lo];  // the own cell's run is cut at i + 1 below
+          hi[runs] = cell_start_[row + c_hi + 1];
+          ++runs;
+        }
+        for (int32_t i = first; i < last; ++i) {
+          // Every candidate is written at `used`, which advances only for a pair (no branch on
+          // the outcome, a coin toss for the predictor).
+          size_t candidates = 0;
+          for (int r = 0; r < runs; ++r) candidates += hi[r] - (r == 0 ? i + 1 : lo[r]);
+          if (used + candidates > out.size()) out.resize(2 * (used + candidates));
+          int32_t* buf = out.data();
+          const size_t before = used;
+          const Vec3 xi = x[i];
+          const double ri = radius[i];
+          const bool grouped = group != nullptr && group[i] >= 0;
+          for (int r = 0; r < runs; ++r)
+            for (int32_t j = (r == 0 ? i + 1 : lo[r]); j < hi[r]; ++j) {
+              const double reach = ri + radius[j] + skin;
+              const bool pair = Norm2(x[j] - xi) < reach * reach;
+              const bool same_clump = grouped && group[i] == group[j];
+              buf[used] = j;
+              used += pair && !same_clump;
+            }
+          cnt.push_back(static_cast<int32_t>(used - before));
         }
       }
-      cnt.push_back(static_cast<int32_t>(out.size() - before));
-    }
+    out.resize(used);
   }
-  // Concatenate the slabs in order (deterministic), partners sorted within each particle; each
-  // slab's part of the list starts at the sum of the slabs before it.
+  // Concatenate the slabs in order (deterministic); each slab's part of the list starts at the
+  // sum of the slabs before it.
   start.resize(n + 1);
   std::vector<size_t> slab_offset(num_slabs + 1, 0);
   for (int s = 0; s < num_slabs; ++s) slab_offset[s + 1] = slab_offset[s] + slab_partner_[s].size();
-  partner.resize(slab_offset[num_slabs]);
+  ResizeWithRoom(partner, slab_offset[num_slabs]);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(num_threads)
   for (int s = 0; s < num_slabs; ++s) {
     size_t k = 0;
@@ -139,7 +154,6 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
       const int32_t c = slab_count_[s][i - slab_start[s]];
       std::copy(slab_partner_[s].begin() + k, slab_partner_[s].begin() + k + c,
                 partner.begin() + offset);
-      std::sort(partner.begin() + offset, partner.begin() + offset + c);
       k += c;
       offset += c;
     }

@@ -24,7 +24,8 @@ class NeighborList {
   // Storage order for locality: perm[new_index] = old_index, sorted by cell key (slab axis
   // slowest) and, within a cell, by the order in which `visit` lists the particles (pass them in
   // persistent-id order to make the result independent of the previous storage order).
-  void ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit, std::vector<int32_t>* perm);
+  void ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit, std::vector<int32_t>* perm,
+                    int num_threads = 1);
 
   // Builds the half list for particles already stored in the order ComputeOrder gave:
   // pairs (i, j > i) with |x_i - x_j| < r_i + r_j + skin. With `group` (n entries), pairs with

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "dem/contact.h"
+#include "dem/grow.h"
 #include "dem/neighbor.h"
 #include "dem/triangle.h"
 
@@ -147,6 +148,10 @@ struct System::Impl {
   // wall candidates (the force pass skips the rest), in storage order, and where each slab's run
   // of them starts (slabs + 1). Refreshed when a particle wakes or falls asleep.
   std::vector<int32_t> busy, slab_busy;
+  // The visited particles with plane candidates, slab by slab (ListWallVisits); the force pass
+  // meets the planes through this short list instead of testing every visited particle.
+  std::vector<int32_t> wall_visit, slab_wall_visit;
+  bool walls_valid = false;
   std::vector<uint8_t> scratch_busy;  // RefreshBusy's marks (N)
   bool busy_valid = false;
   bool active_valid = false;
@@ -161,6 +166,7 @@ struct System::Impl {
   std::vector<Vec3> old_shear, old_wall_shear;
   std::vector<uint8_t> old_touching;
   std::vector<int32_t> perm, visit, index_of_id;
+  std::vector<int32_t> new_of_old;  // inverse of perm (Rebuild)
   std::vector<double> scratch_d;
   std::vector<int64_t> scratch_i64;
   std::vector<int32_t> scratch_i32;
@@ -423,7 +429,7 @@ void System::Rebuild() {
   m.visit.clear();
   for (int64_t id = 0; id < next_id_; ++id)
     if (m.index_of_id[id] >= 0) m.visit.push_back(m.index_of_id[id]);
-  m.list.ComputeOrder(p_.x.data(), m.visit, &m.perm);
+  m.list.ComputeOrder(p_.x.data(), m.visit, &m.perm, nt);
   Permute(p_.id, m.perm, m.scratch_i64, nt);
   Permute(p_.x, m.perm, m.scratch_v, nt);
   Permute(p_.v, m.perm, m.scratch_v, nt);
@@ -458,8 +464,8 @@ void System::Rebuild() {
   const int32_t* clump_of = clumps_.Reindex(p_, next_id_);  // no pairs within a clump
   m.list.Build(p_.x.data(), p_.radius.data(), n, m.skin, nt, clump_of);
   const int64_t num_pairs = static_cast<int64_t>(m.list.num_pairs());
-  m.shear.resize(num_pairs);
-  m.touching.resize(num_pairs);
+  ResizeWithRoom(m.shear, num_pairs);
+  ResizeWithRoom(m.touching, num_pairs);
   int32_t longest = 0;
   for (size_t i = 0; i < n; ++i) longest = std::max(longest, m.list.start[i + 1] - m.list.start[i]);
   m.batch_capacity = std::max<size_t>(kBatchContacts, 2 * static_cast<size_t>(longest));
@@ -483,13 +489,15 @@ void System::Rebuild() {
   }
   wall_start[0] = 0;
   for (int64_t i = 0; i < nn; ++i) wall_start[i + 1] += wall_start[i];
-  m.wall_i.resize(wall_start[n]);
-  m.wall_k.resize(wall_start[n]);
-  m.wall_shear.resize(wall_start[n]);
+  ResizeWithRoom(m.wall_i, wall_start[n]);
+  ResizeWithRoom(m.wall_k, wall_start[n]);
+  ResizeWithRoom(m.wall_shear, wall_start[n]);
 
   // 4. Carry the history over: a new pair (i, j) was the old pair of perm[i] and perm[j], owned
   // by the smaller of the two (its shear flips sign if the owner changed). Only pairs that
-  // touched with a nonzero spring carry anything; every other pair starts afresh.
+  // touched with a nonzero spring carry anything; every other pair starts afresh. So the old
+  // list is walked (in storage order) and each such pair is looked up in the new one: one new
+  // pair per old pair, so the writes never meet.
   {
     const int32_t* start = m.list.start.data();
     const int32_t* partner = m.list.partner.data();
@@ -507,24 +515,33 @@ void System::Rebuild() {
     int32_t* wall_k = m.wall_k.data();
     Vec3* wall_shear = m.wall_shear.data();
 #pragma omp parallel for schedule(static) num_threads(nt)
-    for (int64_t i = 0; i < nn; ++i) {
-      const int32_t oi = perm[i];
-      for (int32_t k = start[i]; k < start[i + 1]; ++k) {
-        shear[k] = Vec3{};
-        touching[k] = 0;
-        if (!carry) continue;
-        const int32_t oj = perm[partner[k]];
-        const int32_t owner = std::min(oi, oj), other = std::max(oi, oj);
-        if (owner >= n_old) continue;
-        for (int32_t q = o_start[owner]; q < o_start[owner + 1]; ++q) {
-          if (o_partner[q] != other) continue;
-          if (o_touching[q] && Norm2(o_shear[q]) > 0.0) {
-            shear[k] = owner == oi ? o_shear[q] : -o_shear[q];
-            touching[k] = 1;
-          }
-          break;
+    for (int64_t k = 0; k < num_pairs; ++k) {
+      shear[k] = Vec3{};
+      touching[k] = 0;
+    }
+    if (carry) {
+      m.new_of_old.resize(n);
+      int32_t* new_of_old = m.new_of_old.data();
+#pragma omp parallel for schedule(static) num_threads(nt)
+      for (int64_t i = 0; i < nn; ++i) new_of_old[perm[i]] = static_cast<int32_t>(i);
+#pragma omp parallel for schedule(static) num_threads(nt)
+      for (int64_t oi = 0; oi < n_old; ++oi) {
+        for (int32_t q = o_start[oi]; q < o_start[oi + 1]; ++q) {
+          if (!(o_touching[q] && Norm2(o_shear[q]) > 0.0)) continue;
+          const int32_t a = new_of_old[oi], b = new_of_old[o_partner[q]];
+          const int32_t owner = std::min(a, b), other = std::max(a, b);
+          for (int32_t k = start[owner]; k < start[owner + 1]; ++k)
+            if (partner[k] == other) {
+              shear[k] = owner == a ? o_shear[q] : -o_shear[q];
+              touching[k] = 1;
+              break;
+            }
         }
       }
+    }
+#pragma omp parallel for schedule(static) num_threads(nt)
+    for (int64_t i = 0; i < nn; ++i) {
+      const int32_t oi = perm[i];
       int32_t e = wall_start[i];
       for (int k = 0; k < np; ++k) {
         if (!near_plane(i, k)) continue;
@@ -574,6 +591,7 @@ void System::Rebuild() {
   m.active_valid = false;
   m.busy_valid = false;
   m.near_valid = false;
+  m.walls_valid = false;
   ++builds_;
 }
 
@@ -603,7 +621,7 @@ void System::RefreshBusy() {
     m.slab_busy[sl + 1] = count;
   }
   for (int sl = 0; sl < ns; ++sl) m.slab_busy[sl + 1] += m.slab_busy[sl];
-  m.busy.resize(m.slab_busy[ns]);
+  ResizeWithRoom(m.busy, m.slab_busy[ns]);
 #pragma omp parallel for schedule(static) num_threads(num_threads_)
   for (int sl = 0; sl < ns; ++sl) {
     int32_t at = m.slab_busy[sl];
@@ -611,14 +629,50 @@ void System::RefreshBusy() {
       if (flag[i]) m.busy[at++] = i;
   }
   m.busy_valid = true;
-  m.near_valid = false;  // the near list covers the busy particles only
+  m.near_valid = false;   // the near list covers the busy particles only
+  m.walls_valid = false;  // and so does the wall list
+}
+
+void System::ListWallVisits() {
+  Impl& m = *impl_;
+  const bool compact = config_.sleep.enabled;
+  const int ns = m.list.num_slabs();
+  const int32_t* wall_start = m.wall_start.data();
+  const int32_t* busy = m.busy.data();
+  m.slab_wall_visit.assign(ns + 1, 0);
+  // Count per slab, then list in visiting order (each in parallel; the result depends on the
+  // data only).
+#pragma omp parallel for schedule(static) num_threads(num_threads_)
+  for (int sl = 0; sl < ns; ++sl) {
+    const int32_t lo = compact ? m.slab_busy[sl] : m.list.slab_start[sl];
+    const int32_t hi = compact ? m.slab_busy[sl + 1] : m.list.slab_start[sl + 1];
+    int32_t count = 0;
+    for (int32_t at = lo; at < hi; ++at) {
+      const int32_t i = compact ? busy[at] : at;
+      count += wall_start[i + 1] > wall_start[i];
+    }
+    m.slab_wall_visit[sl + 1] = count;
+  }
+  for (int sl = 0; sl < ns; ++sl) m.slab_wall_visit[sl + 1] += m.slab_wall_visit[sl];
+  ResizeWithRoom(m.wall_visit, m.slab_wall_visit[ns]);
+#pragma omp parallel for schedule(static) num_threads(num_threads_)
+  for (int sl = 0; sl < ns; ++sl) {
+    const int32_t lo = compact ? m.slab_busy[sl] : m.list.slab_start[sl];
+    const int32_t hi = compact ? m.slab_busy[sl + 1] : m.list.slab_start[sl + 1];
+    int32_t out = m.slab_wall_visit[sl];
+    for (int32_t at = lo; at < hi; ++at) {
+      const int32_t i = compact ? busy[at] : at;
+      if (wall_start[i + 1] > wall_start[i]) m.wall_visit[out++] = i;
+    }
+  }
+  m.walls_valid = true;
 }
 
 void System::BuildNear() {
   Impl& m = *impl_;
   FlushNear();  // the old slots' history first: the new slots take it from the list's arrays
   const size_t n = p_.size();
-  m.scratch_near_k.resize(m.list.num_pairs());
+  ResizeWithRoom(m.scratch_near_k, m.list.num_pairs());
   m.near_count.resize(n);
   m.near_off.resize(n);
   const Vec3* x = p_.x.data();
@@ -665,10 +719,10 @@ void System::BuildNear() {
     near_off[i] = static_cast<int32_t>(slots);
     slots += near_count[i];
   }
-  m.near_k.resize(slots);
-  m.near_j.resize(slots);
-  m.near_shear.resize(slots);
-  m.near_touch.resize(slots);
+  ResizeWithRoom(m.near_k, slots);
+  ResizeWithRoom(m.near_j, slots);
+  ResizeWithRoom(m.near_shear, slots);
+  ResizeWithRoom(m.near_touch, slots);
   int32_t* near_k = m.near_k.data();
   int32_t* near_j = m.near_j.data();
   Vec3* near_shear = m.near_shear.data();
@@ -800,6 +854,8 @@ void System::ComputeForces() {
   const bool compact = config_.sleep.enabled;
   if (compact && !m.busy_valid) RefreshBusy();
   if (!m.near_valid) BuildNear();
+  if (!m.walls_valid) ListWallVisits();
+  const int32_t* wall_visit = m.wall_visit.data();
   const int32_t* near_j = m.near_j.data();
   const int32_t* near_off = m.near_off.data();
   const int32_t* near_count = m.near_count.data();
@@ -886,7 +942,7 @@ void System::ComputeForces() {
           // 2. Contact forces of the batch, one contact per SIMD lane (EvaluateContact, written
           //    without branches).
           PairForces(batch, nb);
-          // 3. Accumulate in batch order (fixed by the data: deterministic), then the walls.
+          // 3. Accumulate in batch order (fixed by the data: deterministic).
           for (size_t b = 0; b < nb; ++b) {
             const int32_t i = batch.i[b], j = batch.j[b];
             shear[batch.k[b]] = Vec3{batch.sx[b], batch.sy[b], batch.sz[b]};
@@ -898,35 +954,38 @@ void System::ComputeForces() {
             worst = std::max(worst, batch.overlap[b]);
           }
           touching += static_cast<int64_t>(nb);
-          for (int32_t at = block; at < block_end; ++at) {
-            const int32_t i = compact ? busy[at] : at;
-            if (wall_start[i] == wall_start[i + 1] || !awake[i]) continue;
-            const Vec3 xi = x[i], vi = v[i], wi = w[i];
-            const double ri = radius[i], mi = mass[i], inv_ii = inv_inertia[i];
-            Vec3 fi, ti;
-            // Particle-plane contacts of i (R* = r_i, m* = m_i: the wall is rigid and fixed).
-            for (int32_t e = wall_start[i]; e < wall_start[i + 1]; ++e) {
-              const Plane& pl = planes[wall_k[e]];
-              const double delta = ri - Dot(xi - pl.point, pl.normal);
-              if (delta <= 0.0) {
-                wall_shear[e] = Vec3{};
-                continue;
-              }
-              const Vec3 nrm = -pl.normal;  // from the particle to the wall
-              const Vec3 v_rel = -(vi + ri * Cross(wi, nrm));
-              const ContactForce cf = EvaluateContact(m.wall[mat[i] * np + wall_k[e]], nrm, delta,
-                                                      ri, mi, v_rel, wi, inv_ii, dt, wall_shear[e]);
-              const Vec3 fa = cf.ft - cf.fn * nrm;
-              fi += fa;
-              ti += ri * Cross(nrm, cf.ft) + cf.mr;
-              plane_force[wall_k[e]] -= fa;
-              worst = std::max(worst, delta / (2.0 * ri));
-              ++wall_touching;
-            }
-            f[i] += fi;
-            t[i] += ti;
-          }
           block = block_end;
+        }
+        // 4. The planes, after all the slab's pairs: a later block's pairs never reach back
+        //    to an earlier particle (j > i), so each sum adds up in the same order as if the
+        //    planes came right after their particle's block.
+        for (int32_t a = m.slab_wall_visit[s]; a < m.slab_wall_visit[s + 1]; ++a) {
+          const int32_t i = wall_visit[a];
+          if (!awake[i]) continue;
+          const Vec3 xi = x[i], vi = v[i], wi = w[i];
+          const double ri = radius[i], mi = mass[i], inv_ii = inv_inertia[i];
+          Vec3 fi, ti;
+          // Particle-plane contacts of i (R* = r_i, m* = m_i: the wall is rigid and fixed).
+          for (int32_t e = wall_start[i]; e < wall_start[i + 1]; ++e) {
+            const Plane& pl = planes[wall_k[e]];
+            const double delta = ri - Dot(xi - pl.point, pl.normal);
+            if (delta <= 0.0) {
+              wall_shear[e] = Vec3{};
+              continue;
+            }
+            const Vec3 nrm = -pl.normal;  // from the particle to the wall
+            const Vec3 v_rel = -(vi + ri * Cross(wi, nrm));
+            const ContactForce cf = EvaluateContact(m.wall[mat[i] * np + wall_k[e]], nrm, delta,
+                                                    ri, mi, v_rel, wi, inv_ii, dt, wall_shear[e]);
+            const Vec3 fa = cf.ft - cf.fn * nrm;
+            fi += fa;
+            ti += ri * Cross(nrm, cf.ft) + cf.mr;
+            plane_force[wall_k[e]] -= fa;
+            worst = std::max(worst, delta / (2.0 * ri));
+            ++wall_touching;
+          }
+          f[i] += fi;
+          t[i] += ti;
         }
         m.slab_overlap[s] = worst;
         m.slab_contacts[s] = touching;
@@ -1485,7 +1544,7 @@ void System::RefreshActive() {
     at[c + 1] = count;
   }
   for (int64_t c = 0; c < chunks; ++c) at[c + 1] += at[c];
-  m.active.resize(at[chunks]);
+  ResizeWithRoom(m.active, at[chunks]);
   int32_t* active = m.active.data();
 #pragma omp parallel for schedule(static) num_threads(num_threads_)
   for (int64_t c = 0; c < chunks; ++c) {

@@ -208,6 +208,7 @@ class System {
   void RefreshActive();  // list the awake particles
   void BuildNear();      // the pairs of the list that can touch before near_skin / 2 of motion
   void RefreshBusy();    // list the particles the force pass visits (sleeping on)
+  void ListWallVisits();  // list the visited particles with plane candidates
   void FlushNear() const;  // the near slots' history back into the list's (Impl::near_k)
   struct ContactBatch;
   void PairForces(ContactBatch& batch, size_t n);  // forces of a batch of touching pairs
