@@ -36,7 +36,8 @@ void NeighborList::SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size
     axis_[g] = order[g];
     n_[g] = std::max(1, static_cast<int>(std::floor(ext[order[g]] * inv_cell_)));
   }
-  cell_start_.assign(static_cast<size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
+  // Two halves per slab (awake first, then asleep: see ComputeOrder).
+  cell_start_.assign(2 * static_cast<size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
   count_.assign(cell_start_.size() - 1, 0);
 }
 
@@ -51,13 +52,17 @@ int64_t NeighborList::CellKey(const Vec3& x, int c[3]) const {
 }
 
 void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit,
-                                std::vector<int32_t>* perm, int num_threads) {
+                                std::vector<int32_t>* perm, int num_threads,
+                                const uint8_t* awake) {
   const int64_t n = static_cast<int64_t>(visit.size());
+  const int64_t per_slab = static_cast<int64_t>(n_[1]) * n_[2];
   std::vector<int64_t> key(n);
 #pragma omp parallel for schedule(static) num_threads(num_threads)
   for (int64_t i = 0; i < n; ++i) {
     int c[3];
-    key[i] = CellKey(x[visit[i]], c);
+    const int64_t cell = CellKey(x[visit[i]], c);
+    const int64_t half = awake != nullptr && !awake[visit[i]] ? 1 : 0;  // asleep: second half
+    key[i] = (2 * c[0] + half) * per_slab + (cell - c[0] * per_slab);
   }
   std::fill(count_.begin(), count_.end(), 0);
   for (int64_t i = 0; i < n; ++i) ++count_[key[i]];
@@ -69,17 +74,11 @@ void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit
   }
   cell_start_.back() = sum;
   perm->resize(n);
-  key_.resize(n);
   std::vector<int32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-  for (int64_t i = 0; i < n; ++i) {
-    const int32_t dst = fill[key[i]]++;
-    (*perm)[dst] = visit[i];
-    key_[dst] = key[i];
-  }
-  // Slab ranges: slab s holds cells [s * n1 * n2, (s + 1) * n1 * n2).
-  const int64_t per_slab = static_cast<int64_t>(n_[1]) * n_[2];
+  for (int64_t i = 0; i < n; ++i) (*perm)[fill[key[i]]++] = visit[i];
+  // Slab ranges: slab s holds sort keys [2 s n1 n2, 2 (s + 1) n1 n2).
   slab_start.resize(n_[0] + 1);
-  for (int s = 0; s <= n_[0]; ++s) slab_start[s] = cell_start_[s * per_slab];
+  for (int s = 0; s <= n_[0]; ++s) slab_start[s] = cell_start_[2 * s * per_slab];
 }
 
 void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double skin,
@@ -88,55 +87,85 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
   const int n1 = n_[1], n2 = n_[2];
   slab_partner_.resize(num_slabs);
   slab_count_.resize(num_slabs);
-  // Forward half stencil: the own cell (j > i) and the 13 neighbour cells with a larger key. In
-  // key order they are five runs of consecutive cells, each a contiguous range of particles:
-  // (0, 0, 0..1), (0, 1, -1..1), (1, -1, -1..1), (1, 0, -1..1), (1, 1, -1..1) in (slab, second,
-  // third) offsets. Visited in that order, each particle's partners come out ascending.
-  const int row_da[5] = {0, 0, 1, 1, 1}, row_db[5] = {0, 1, -1, 0, 1};
+  // The pairs of i with larger storage indices: its own cell after it and the cells that come
+  // later in storage order within reach. In (slab, half, second, third) offsets those are runs
+  // of consecutive cells, each a contiguous range of particles, listed here in storage order so
+  // that each particle's partners come out ascending (the first run starts after i):
+  // - awake i: (0, awake, 0, 0..1), (0, awake, 1, -1..1), the asleep half of its own slab
+  //   (0, asleep, -1..1, -1..1), and both halves of the next slab (1, *, -1..1, -1..1);
+  // - asleep i: (0, asleep, 0, 0..1), (0, asleep, 1, -1..1), and the next slab's halves.
+  // Without sleepers this is the usual forward half stencil of 13 cells and the own cell.
+  struct RunSpec {
+    int ds, half, db, dc_lo;
+  };
+  static constexpr RunSpec kRuns[2][11] = {
+      {{0, 0, 0, 0},
+       {0, 0, 1, -1},
+       {0, 1, -1, -1},
+       {0, 1, 0, -1},
+       {0, 1, 1, -1},
+       {1, 0, -1, -1},
+       {1, 0, 0, -1},
+       {1, 0, 1, -1},
+       {1, 1, -1, -1},
+       {1, 1, 0, -1},
+       {1, 1, 1, -1}},
+      {{0, 1, 0, 0},
+       {0, 1, 1, -1},
+       {1, 0, -1, -1},
+       {1, 0, 0, -1},
+       {1, 0, 1, -1},
+       {1, 1, -1, -1},
+       {1, 1, 0, -1},
+       {1, 1, 1, -1}}};
+  static constexpr int kNumRuns[2] = {11, 8};
+  const auto cell_of = [&](int slab, int half, int b, int c) {
+    return ((static_cast<int64_t>(2 * slab + half)) * n1 + b) * n2 + c;
+  };
 #pragma omp parallel for schedule(dynamic, 1) num_threads(num_threads)
   for (int s = 0; s < num_slabs; ++s) {
     std::vector<int32_t>& out = slab_partner_[s];
     std::vector<int32_t>& cnt = slab_count_[s];
     cnt.clear();
     size_t used = 0;
-    for (int c1 = 0; c1 < n1; ++c1)
-      for (int c2 = 0; c2 < n2; ++c2) {
-        const int64_t cell = (static_cast<int64_t>(s) * n1 + c1) * n2 + c2;
-        const int32_t first = cell_start_[cell], last = cell_start_[cell + 1];
-        if (first == last) continue;
-        int32_t lo[5], hi[5];
-        int runs = 0;
-        for (int r = 0; r < 5; ++r) {
-          const int a = s + row_da[r], b = c1 + row_db[r];
-          if (a >= n_[0] || b < 0 || b >= n1) continue;
-          const int64_t row = (static_cast<int64_t>(a) * n1 + b) * n2;
-          const int c_lo = r == 0 ? c2 : std::max(c2 - 1, 0), c_hi = std::min(c2 + 1, n2 - 1);
-          lo[runs] = cell_start_[row + c_lo];  // the own cell's run is cut at i + 1 below
-          hi[runs] = cell_start_[row + c_hi + 1];
-          ++runs;
+    for (int h = 0; h < 2; ++h)
+      for (int c1 = 0; c1 < n1; ++c1)
+        for (int c2 = 0; c2 < n2; ++c2) {
+          const int64_t cell = cell_of(s, h, c1, c2);
+          const int32_t first = cell_start_[cell], last = cell_start_[cell + 1];
+          if (first == last) continue;
+          int32_t lo[11], hi[11];
+          int runs = 0;
+          for (int r = 0; r < kNumRuns[h]; ++r) {
+            const RunSpec& rs = kRuns[h][r];
+            const int a = s + rs.ds, b = c1 + rs.db;
+            if (a >= n_[0] || b < 0 || b >= n1) continue;
+            lo[runs] = cell_start_[cell_of(a, rs.half, b, std::max(c2 + rs.dc_lo, 0))];
+            hi[runs] = cell_start_[cell_of(a, rs.half, b, std::min(c2 + 1, n2 - 1)) + 1];
+            ++runs;
+          }
+          for (int32_t i = first; i < last; ++i) {
+            // Every candidate is written at `used`, which advances only for a pair (no branch on
+            // the outcome, a coin toss for the predictor).
+            size_t candidates = 0;
+            for (int r = 0; r < runs; ++r) candidates += hi[r] - (r == 0 ? i + 1 : lo[r]);
+            if (used + candidates > out.size()) out.resize(2 * (used + candidates));
+            int32_t* buf = out.data();
+            const size_t before = used;
+            const Vec3 xi = x[i];
+            const double ri = radius[i];
+            const bool grouped = group != nullptr && group[i] >= 0;
+            for (int r = 0; r < runs; ++r)
+              for (int32_t j = (r == 0 ? i + 1 : lo[r]); j < hi[r]; ++j) {
+                const double reach = ri + radius[j] + skin;
+                const bool pair = Norm2(x[j] - xi) < reach * reach;
+                const bool same_clump = grouped && group[i] == group[j];
+                buf[used] = j;
+                used += pair && !same_clump;
+              }
+            cnt.push_back(static_cast<int32_t>(used - before));
+          }
         }
-        for (int32_t i = first; i < last; ++i) {
-          // Every candidate is written at `used`, which advances only for a pair (no branch on
-          // the outcome, a coin toss for the predictor).
-          size_t candidates = 0;
-          for (int r = 0; r < runs; ++r) candidates += hi[r] - (r == 0 ? i + 1 : lo[r]);
-          if (used + candidates > out.size()) out.resize(2 * (used + candidates));
-          int32_t* buf = out.data();
-          const size_t before = used;
-          const Vec3 xi = x[i];
-          const double ri = radius[i];
-          const bool grouped = group != nullptr && group[i] >= 0;
-          for (int r = 0; r < runs; ++r)
-            for (int32_t j = (r == 0 ? i + 1 : lo[r]); j < hi[r]; ++j) {
-              const double reach = ri + radius[j] + skin;
-              const bool pair = Norm2(x[j] - xi) < reach * reach;
-              const bool same_clump = grouped && group[i] == group[j];
-              buf[used] = j;
-              used += pair && !same_clump;
-            }
-          cnt.push_back(static_cast<int32_t>(used - before));
-        }
-      }
     out.resize(used);
   }
   // Concatenate the slabs in order (deterministic); each slab's part of the list starts at the

@@ -1,9 +1,9 @@
 // Neighbour search: a uniform cell grid that orders particles for memory locality, and a half
 // Verlet list (each pair once, stored with the lower storage index) built from it.
 //
-// Parallel, deterministic force accumulation rests on this layout: particles are sorted by cell
-// with one axis (the "slab" axis, the one with most cells) varying slowest, and the cells are at
-// least one cutoff wide. A pair (i, j > i) then has j in the slab of i or in the next one, so
+// Parallel, deterministic force accumulation rests on this layout: particles are sorted by slab
+// (one axis, the one with most cells, varying slowest; within a slab by cell, awake particles
+// first), and the cells are at least one cutoff wide. A pair (i, j > i) then has j in the slab of i or in the next one, so
 // processing even slabs in parallel and then odd slabs never writes one particle from two threads,
 // and the order in which forces add up is fixed by the data alone, whatever the thread count.
 #pragma once
@@ -21,11 +21,13 @@ class NeighborList {
   // that must be found: 2 r_max + skin). Caps the cell count near 4 n + 4096 by widening cells.
   void SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n);
 
-  // Storage order for locality: perm[new_index] = old_index, sorted by cell key (slab axis
-  // slowest) and, within a cell, by the order in which `visit` lists the particles (pass them in
-  // persistent-id order to make the result independent of the previous storage order).
+  // Storage order for locality: perm[new_index] = old_index, sorted by slab, then (with `awake`,
+  // one flag per particle) the awake particles before the sleeping ones, then by cell and, within
+  // a cell, by the order in which `visit` lists the particles (pass them in persistent-id order
+  // to make the result independent of the previous storage order). With sleeping, the awake
+  // particles, the ones every step moves, then lie together in memory.
   void ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit, std::vector<int32_t>* perm,
-                    int num_threads = 1);
+                    int num_threads = 1, const uint8_t* awake = nullptr);
 
   // Builds the half list for particles already stored in the order ComputeOrder gave:
   // pairs (i, j > i) with |x_i - x_j| < r_i + r_j + skin. With `group` (n entries), pairs with
@@ -47,9 +49,9 @@ class NeighborList {
   double inv_cell_ = 0;
   int n_[3] = {1, 1, 1};             // cells along (slab axis, second axis, third axis)
   int axis_[3] = {0, 1, 2};          // world axis of each grid axis
-  std::vector<int64_t> key_;         // cell key of each particle (n), in storage order after sort
-  std::vector<int32_t> cell_start_;  // first particle of each cell (num_cells + 1)
-  std::vector<int32_t> count_;       // scratch (num_cells)
+  std::vector<int32_t> cell_start_;  // first particle of each sort key (2 num_cells + 1):
+                                     // (slab, awake then asleep half, second, third axis)
+  std::vector<int32_t> count_;       // scratch (2 num_cells)
   std::vector<std::vector<int32_t>> slab_partner_;  // per-slab build buffers
   std::vector<std::vector<int32_t>> slab_count_;
 };

@@ -429,7 +429,8 @@ void System::Rebuild() {
   m.visit.clear();
   for (int64_t id = 0; id < next_id_; ++id)
     if (m.index_of_id[id] >= 0) m.visit.push_back(m.index_of_id[id]);
-  m.list.ComputeOrder(p_.x.data(), m.visit, &m.perm, nt);
+  m.list.ComputeOrder(p_.x.data(), m.visit, &m.perm, nt,
+                      config_.sleep.enabled ? p_.awake.data() : nullptr);
   Permute(p_.id, m.perm, m.scratch_i64, nt);
   Permute(p_.x, m.perm, m.scratch_v, nt);
   Permute(p_.v, m.perm, m.scratch_v, nt);
