@@ -151,6 +151,10 @@ struct System::Impl {
   // The visited particles with plane candidates, slab by slab (ListWallVisits); the force pass
   // meets the planes through this short list instead of testing every visited particle.
   std::vector<int32_t> wall_visit, slab_wall_visit;
+  // The force pass's slab order: the even slabs, then (from odd_from) the odd ones, each phase
+  // heaviest first (BuildNear).
+  std::vector<int32_t> slab_order;
+  int odd_from = 0;
   bool walls_valid = false;
   std::vector<uint8_t> scratch_busy;  // RefreshBusy's marks (N)
   bool busy_valid = false;
@@ -714,12 +718,30 @@ void System::BuildNear() {
     near_count[i] = at - start[i];
   }
   // 2. Pack them slot after slot in visiting order, each with its pair's history.
+  const int ns = m.list.num_slabs();
+  std::vector<int64_t> weight(ns);
   int64_t slots = 0;
-  for (int64_t a = 0; a < visits; ++a) {
-    const int64_t i = sleeping ? busy[a] : a;
-    near_off[i] = static_cast<int32_t>(slots);
-    slots += near_count[i];
+  for (int sl = 0; sl < ns; ++sl) {
+    const int64_t lo = sleeping ? m.slab_busy[sl] : m.list.slab_start[sl];
+    const int64_t hi = sleeping ? m.slab_busy[sl + 1] : m.list.slab_start[sl + 1];
+    const int64_t before = slots;
+    for (int64_t a = lo; a < hi; ++a) {
+      const int64_t i = sleeping ? busy[a] : a;
+      near_off[i] = static_cast<int32_t>(slots);
+      slots += near_count[i];
+    }
+    weight[sl] = slots - before + (hi - lo);  // the force pass's work: pairs and particles
   }
+  // The force pass hands out each phase's slabs heaviest first, so that the last ones, those
+  // that may leave a thread waiting, are light (with sleeping the work sits in a few slabs).
+  m.slab_order.resize(ns);
+  for (int sl = 0; sl < ns; ++sl) m.slab_order[sl] = sl;
+  const auto phase_end = std::stable_partition(m.slab_order.begin(), m.slab_order.end(),
+                                               [](int32_t sl) { return sl % 2 == 0; });
+  const auto heavier = [&](int32_t a, int32_t b) { return weight[a] > weight[b]; };
+  std::stable_sort(m.slab_order.begin(), phase_end, heavier);
+  std::stable_sort(phase_end, m.slab_order.end(), heavier);
+  m.odd_from = static_cast<int>(phase_end - m.slab_order.begin());
   ResizeWithRoom(m.near_k, slots);
   ResizeWithRoom(m.near_j, slots);
   ResizeWithRoom(m.near_shear, slots);
@@ -872,8 +894,10 @@ void System::ComputeForces() {
   {
     // Even slabs, then odd slabs (see neighbor.h for why this is race-free and deterministic).
     for (int phase = 0; phase < 2; ++phase) {
+      const int first = phase == 0 ? 0 : m.odd_from, last = phase == 0 ? m.odd_from : nslabs;
 #pragma omp for schedule(dynamic, 1)
-      for (int s = phase; s < nslabs; s += 2) {
+      for (int at_slab = first; at_slab < last; ++at_slab) {
+        const int s = m.slab_order[at_slab];  // heaviest first (BuildNear)
         double worst = 0;
         int64_t touching = 0, wall_touching = 0;
         Vec3* plane_force = m.slab_plane_force.data() + static_cast<size_t>(s) * np;
