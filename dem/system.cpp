@@ -16,47 +16,37 @@
 
 namespace dem {
 
-// Contacts gathered before one vectorised force evaluation (a block of particles' worth).
-constexpr size_t kBatchContacts = 64;  // ~40 arrays x 64 x 8 B: stays in L1
+// Contacts gathered before one vectorised force evaluation (a block of particles' worth; a
+// particle with more near pairs than that comes in pieces).
+constexpr int kBatchContacts = 64;  // 40 arrays x 64 x 8 B = 20 KB: stays in L1
 
 // Per-thread scratch of the force pass: the particle-pair contacts of a block of particles,
-// gathered so their forces can be computed in one vectorised loop (structure of arrays).
-struct System::ContactBatch {
+// gathered so their forces can be computed in one vectorised loop (structure of arrays). Fixed
+// arrays in one block: every column sits at a constant offset from one base register.
+struct alignas(64) System::ContactBatch {
+  static constexpr int K = kBatchContacts;
   // Inputs, gathered by the scalar pass (structure of arrays, one entry per touching pair).
-  std::vector<int32_t> i, j, k;       // owner, partner, near slot
-  std::vector<uint8_t> was;           // the pair touched at the last step
-  std::vector<double> dx, dy, dz;     // x_j - x_i [m]
-  std::vector<double> dvx, dvy, dvz;  // v_j - v_i [m/s]
-  std::vector<double> ax, ay, az;     // r_i w_i + r_j w_j [m/s]
-  std::vector<double> wx, wy, wz;     // w_i - w_j [rad/s]
-  std::vector<double> ri, rj;         // radii [m]
-  std::vector<double> inv_m_star;     // 1/m_i + 1/m_j [1/kg]
-  std::vector<int32_t> pair;          // index of the material pair
-  std::vector<double> inv_inertia;    // 1/I_i + 1/I_j [1/(kg m^2)]
-  std::vector<double> e_star, g_star, damp, tangential_ratio, friction, rolling;  // PairConstants
-  std::vector<double> sx, sy, sz;  // tangential history in, then out [m]
+  double dx[K], dy[K], dz[K];     // x_j - x_i [m]
+  double dvx[K], dvy[K], dvz[K];  // v_j - v_i [m/s]
+  double ax[K], ay[K], az[K];     // r_i w_i + r_j w_j [m/s]
+  double wx[K], wy[K], wz[K];     // w_i - w_j [rad/s]
+  double ri[K], rj[K];            // radii [m]
+  double inv_m_star[K];           // 1/m_i + 1/m_j [1/kg]
+  double inv_inertia[K];          // 1/I_i + 1/I_j [1/(kg m^2)]
+  double e_star[K], g_star[K], damp[K], tangential_ratio[K], friction[K], rolling[K];
+  double sx[K], sy[K], sz[K];  // tangential history in, then out [m]
   // Outputs.
-  std::vector<double> fx, fy, fz;     // force on i [N]
-  std::vector<double> tix, tiy, tiz;  // torque on i [N m]
-  std::vector<double> tjx, tjy, tjz;  // torque on j [N m]
-  std::vector<double> overlap;        // delta / smaller diameter
-  void Resize(size_t n) {
-    for (auto* a : {&i, &j, &k, &pair}) a->resize(n);
-    was.resize(n);
-    for (auto* a : {&dx,          &dy,      &dz,     &dvx,  &dvy,
-                    &dvz,         &ax,      &ay,     &az,   &wx,
-                    &wy,          &wz,      &ri,     &rj,   &inv_m_star,
-                    &inv_inertia, &e_star,  &g_star, &damp, &tangential_ratio,
-                    &friction,    &rolling, &sx,     &sy,   &sz,
-                    &fx,          &fy,      &fz,     &tix,  &tiy,
-                    &tiz,         &tjx,     &tjy,    &tjz,  &overlap})
-      a->resize(n);
-  }
+  double fx[K], fy[K], fz[K];     // force on i [N]
+  double tix[K], tiy[K], tiz[K];  // torque on i [N m]
+  double tjx[K], tjy[K], tjz[K];  // torque on j [N m]
+  double overlap[K];              // delta / smaller diameter
+  int32_t i[K], j[K], k[K];       // owner, partner, near slot
+  int32_t pair[K];                // index of the material pair
+  uint8_t was[K];                 // the pair touched at the last step
 };
 
 // Stores a vector into three structure-of-arrays columns at entry b.
-inline void Put(std::vector<double>& cx, std::vector<double>& cy, std::vector<double>& cz, size_t b,
-                const Vec3& a) {
+inline void Put(double* cx, double* cy, double* cz, size_t b, const Vec3& a) {
   cx[b] = a.x;
   cy[b] = a.y;
   cz[b] = a.z;
@@ -161,7 +151,6 @@ struct System::Impl {
   bool active_valid = false;
 
   std::vector<ContactBatch> batches;  // one per thread
-  size_t batch_capacity = 0;
 
   std::vector<ContactRecord> pending;  // history to apply at the next build
   // The previous build's list and history, kept during a rebuild to carry the history over
@@ -471,9 +460,6 @@ void System::Rebuild() {
   const int64_t num_pairs = static_cast<int64_t>(m.list.num_pairs());
   ResizeWithRoom(m.shear, num_pairs);
   ResizeWithRoom(m.touching, num_pairs);
-  int32_t longest = 0;
-  for (size_t i = 0; i < n; ++i) longest = std::max(longest, m.list.start[i + 1] - m.list.start[i]);
-  m.batch_capacity = std::max<size_t>(kBatchContacts, 2 * static_cast<size_t>(longest));
   const int np = static_cast<int>(config_.planes.size());
   const Plane* planes = config_.planes.data();
   const Vec3* x = p_.x.data();
@@ -887,8 +873,6 @@ void System::ComputeForces() {
   const int32_t* busy = m.busy.data();
   const uint8_t* awake = p_.awake.data();
   if (m.batches.size() < static_cast<size_t>(num_threads_)) m.batches.resize(num_threads_);
-  for (ContactBatch& b : m.batches)
-    if (b.i.size() < m.batch_capacity) b.Resize(m.batch_capacity);
 
 #pragma omp parallel num_threads(num_threads_)
   {
@@ -906,6 +890,7 @@ void System::ComputeForces() {
         // the list of busy ones.
         const int32_t slab_end = compact ? m.slab_busy[s + 1] : m.list.slab_start[s + 1];
         int32_t block = compact ? m.slab_busy[s] : m.list.slab_start[s];
+        int32_t resume = 0;  // near pairs of the block's first particle already done (pieces)
         while (block < slab_end) {
           // 1. Find the touching pairs of a block of particles without branching on the
           //    outcome (a contact is a coin toss for the branch predictor): write every
@@ -914,14 +899,22 @@ void System::ComputeForces() {
           //    no tangential history.
           size_t nb = 0;
           int32_t block_end = block;
+          bool piece = false;  // the batch ends inside the near pairs of busy[block_end]
+          int32_t q_end = 0;
           for (; block_end < slab_end; ++block_end) {
             const int32_t i = compact ? busy[block_end] : block_end;
-            if (nb + static_cast<size_t>(near_count[i]) > m.batch_capacity) break;
+            const int32_t q_begin = near_off[i] + (block_end == block ? resume : 0);
+            q_end = near_off[i] + near_count[i];
+            if (nb + static_cast<size_t>(q_end - q_begin) > ContactBatch::K) {
+              if (nb > 0) break;  // the next batch takes it
+              q_end = q_begin + ContactBatch::K;
+              piece = true;
+            }
             const Vec3 xi = x[i];
             const double ri = radius[i];
             // Only the near pairs can touch (see Impl::near_k); none joins two sleepers (the
             // near list is made again whenever a particle wakes or falls asleep).
-            for (int32_t q = near_off[i]; q < near_off[i] + near_count[i]; ++q) {
+            for (int32_t q = q_begin; q < q_end; ++q) {
               const int32_t j = near_j[q];
               const double rsum = ri + radius[j];
               const bool contact = Norm2(x[j] - xi) < rsum * rsum;
@@ -932,6 +925,7 @@ void System::ComputeForces() {
               touched[q] = contact;
               nb += contact;
             }
+            if (piece) break;
           }
           // Gather what the force law needs, one contact at a time (no branches).
           bool uniform = true;
@@ -956,13 +950,12 @@ void System::ComputeForces() {
           for (size_t b = 0; b < nb; b = uniform ? nb : b + 1) {
             const PairConstants& c = pc[batch.pair[b]];
             const size_t end = uniform ? nb : b + 1;
-            std::fill(batch.e_star.begin() + b, batch.e_star.begin() + end, c.e_star);
-            std::fill(batch.g_star.begin() + b, batch.g_star.begin() + end, c.g_star);
-            std::fill(batch.damp.begin() + b, batch.damp.begin() + end, c.damp);
-            std::fill(batch.tangential_ratio.begin() + b, batch.tangential_ratio.begin() + end,
-                      c.tangential_ratio);
-            std::fill(batch.friction.begin() + b, batch.friction.begin() + end, c.friction);
-            std::fill(batch.rolling.begin() + b, batch.rolling.begin() + end, c.rolling_friction);
+            std::fill(batch.e_star + b, batch.e_star + end, c.e_star);
+            std::fill(batch.g_star + b, batch.g_star + end, c.g_star);
+            std::fill(batch.damp + b, batch.damp + end, c.damp);
+            std::fill(batch.tangential_ratio + b, batch.tangential_ratio + end, c.tangential_ratio);
+            std::fill(batch.friction + b, batch.friction + end, c.friction);
+            std::fill(batch.rolling + b, batch.rolling + end, c.rolling_friction);
           }
           // 2. Contact forces of the batch, one contact per SIMD lane (EvaluateContact, written
           //    without branches).
@@ -979,7 +972,14 @@ void System::ComputeForces() {
             worst = std::max(worst, batch.overlap[b]);
           }
           touching += static_cast<int64_t>(nb);
-          block = block_end;
+          if (piece) {  // go on with the same particle
+            const int32_t i = compact ? busy[block_end] : block_end;
+            resume = q_end - near_off[i];
+            block = block_end;
+          } else {
+            resume = 0;
+            block = block_end;
+          }
         }
         // 4. The planes, after all the slab's pairs: a later block's pairs never reach back
         //    to an earlier particle (j > i), so each sum adds up in the same order as if the

@@ -78,6 +78,48 @@ TEST(HertzTest, MixedMaterialPairsEachUseTheirOwnModulus) {
   }
 }
 
+// More contacts on one particle than a batch of the force pass holds (64, so its pairs come in
+// pieces): a 10 mm sphere ringed by 220 spheres of 1 mm on a Fibonacci lattice, each pressed in
+// by delta = 1e-3 r and none touching another. Every ring sphere gets the Hertz force
+// 4/3 E* sqrt(R*) delta^(3/2) along its own radial direction (0.1%), the pair count is 220 (no
+// pair lost or counted twice), and the big sphere's force is minus the sum of theirs
+// (1e-12 relative to that sum's terms: Newton's third law, pair by pair).
+TEST(HertzTest, ContactsBeyondOneBatchEachCountOnce) {
+  const Interaction snow{0.88, 0.58, 0.05};
+  const double big = 10e-3, r = 1e-3, delta = 1e-3 * r;
+  const int n = 220;
+  System s(SnowAndSteel(snow, snow), StaticConfig());
+  s.AddParticle({0, 0, 0}, {}, {}, big, 0);
+  std::vector<Vec3> dir;
+  for (int k = 0; k < n; ++k) {
+    const double z = 1.0 - (2.0 * k + 1.0) / n, rho = std::sqrt(1.0 - z * z);
+    const double phi = k * M_PI * (3.0 - std::sqrt(5.0));
+    dir.push_back({rho * std::cos(phi), rho * std::sin(phi), z});
+    s.AddParticle((big + r - delta) * dir.back(), {}, {}, r, 0);
+  }
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b)
+      ASSERT_GT(Norm((big + r) * (dir[a] - dir[b])), 2 * r + 1e-4) << "ring spheres apart";
+  test::StepOk(s);
+  EXPECT_EQ(s.neighbor_stats().contacts, n);
+  const double r_star = big * r / (big + r);
+  const double expected = 4.0 / 3.0 * EffectiveModulus(test::Snow(), test::Snow()) *
+                          std::sqrt(r_star) * std::pow(delta, 1.5);
+  const Particles& p = s.particles();
+  Vec3 sum, centre;
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (p.id[i] == 0) {
+      centre = p.f[i];
+      continue;
+    }
+    const Vec3 d = dir[p.id[i] - 1];
+    EXPECT_NEAR(Dot(p.f[i], d), expected, 1e-3 * expected) << "ring sphere " << p.id[i];
+    EXPECT_LT(Norm(p.f[i] - Dot(p.f[i], d) * d), 1e-9 * expected) << "ring sphere " << p.id[i];
+    sum += p.f[i];
+  }
+  EXPECT_LT(Norm(centre + sum), 1e-12 * n * expected);
+}
+
 // Sphere-plane: R* = R, E* from the sphere and the wall material; within 0.1%.
 TEST(HertzTest, SpherePlaneNormalForceMatchesClosedForm) {
   const Interaction snow{0.88, 0.58, 0.05};
