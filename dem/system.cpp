@@ -151,6 +151,7 @@ struct System::Impl {
   bool active_valid = false;
 
   std::vector<ContactBatch> batches;  // one per thread
+  int32_t particle_material = -1;     // the material of every particle, or -1 (Rebuild)
 
   std::vector<ContactRecord> pending;  // history to apply at the next build
   // The previous build's list and history, kept during a rebuild to carry the history over
@@ -435,6 +436,9 @@ void System::Rebuild() {
   Permute(p_.inv_mass, m.perm, m.scratch_d, nt);
   Permute(p_.inv_inertia, m.perm, m.scratch_d, nt);
   Permute(p_.material, m.perm, m.scratch_i32, nt);
+  m.particle_material = n > 0 ? p_.material[0] : -1;
+  for (size_t i = 1; i < n && m.particle_material >= 0; ++i)
+    if (p_.material[i] != m.particle_material) m.particle_material = -1;
   Permute(p_.awake, m.perm, m.scratch_u8, nt);
   for (size_t i = 0; i < n; ++i) m.index_of_id[p_.id[i]] = static_cast<int32_t>(i);
   // Mesh contact history follows its particles; candidates are found again at the next step.
@@ -758,12 +762,22 @@ void System::BuildNear() {
 
 // Hertz-Mindlin forces of a batch of particle pairs: the same law as EvaluateContact
 // (dem/contact.h), written without branches so that the compiler runs one contact per SIMD lane.
-void System::PairForces(ContactBatch& b, size_t nb) {
+template <bool kOnePair>
+void System::PairForces(ContactBatch& b, size_t nb, const PairConstants& one) {
   const double dt = config_.time_step;
   ContactBatch& __restrict c = b;
   const int n = static_cast<int>(nb);
+  // The pair constants: the one pair's, broadcast, or each contact's own column.
+  const auto pick = [](double scalar, const double* column, int e) {
+    return kOnePair ? scalar : column[e];
+  };
 #pragma omp simd
   for (int e = 0; e < n; ++e) {
+    const double e_star = pick(one.e_star, c.e_star, e), g_star = pick(one.g_star, c.g_star, e);
+    const double damp = pick(one.damp, c.damp, e);
+    const double tangential_ratio = pick(one.tangential_ratio, c.tangential_ratio, e);
+    const double friction = pick(one.friction, c.friction, e);
+    const double rolling = pick(one.rolling_friction, c.rolling, e);
     const double dx = c.dx[e], dy = c.dy[e], dz = c.dz[e];
     const double ri = c.ri[e], rj = c.rj[e];
     const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
@@ -780,8 +794,8 @@ void System::PairForces(ContactBatch& b, size_t nb) {
     const double vtx = vx - vn * nx, vty = vy - vn * ny, vtz = vz - vn * nz;
     // Normal: Hertz spring + damping, no tension.
     const double sq = std::sqrt(r_star * delta);
-    const double sn = 2.0 * c.e_star[e] * sq;
-    const double gamma_n = c.damp[e] * std::sqrt(sn / c.inv_m_star[e]);
+    const double sn = 2.0 * e_star * sq;
+    const double gamma_n = damp * std::sqrt(sn / c.inv_m_star[e]);
     const double fn = std::max(0.0, 2.0 / 3.0 * sn * delta - gamma_n * vn);
     // Tangential history: back into the tangent plane at its old length, plus v_t dt.
     double sx = c.sx[e], sy = c.sy[e], sz = c.sz[e];
@@ -796,12 +810,12 @@ void System::PairForces(ContactBatch& b, size_t nb) {
     sy = sy * scale + dt * vty;
     sz = sz * scale + dt * vtz;
     // Mindlin spring + damping, Coulomb cap (the spring then carries the friction force).
-    const double st = 4.0 * c.g_star[e] / c.e_star[e] * sn;
-    const double gamma_t = c.tangential_ratio[e] * gamma_n;
+    const double st = 4.0 * g_star / e_star * sn;
+    const double gamma_t = tangential_ratio * gamma_n;
     double ftx = st * sx + gamma_t * vtx, fty = st * sy + gamma_t * vty,
            ftz = st * sz + gamma_t * vtz;
     const double ft2 = ftx * ftx + fty * fty + ftz * ftz;
-    const double cap = c.friction[e] * fn;
+    const double cap = friction * fn;
     const bool slide = ft2 > cap * cap;
     const double ratio = slide ? cap / std::sqrt(ft2) : 1.0;
     ftx *= ratio;
@@ -815,8 +829,8 @@ void System::PairForces(ContactBatch& b, size_t nb) {
     const double wrx = c.wx[e], wry = c.wy[e], wrz = c.wz[e];
     const double w2 = wrx * wrx + wry * wry + wrz * wrz;
     const double wn = std::sqrt(w2);
-    const double mr_mag = std::min(c.rolling[e] * r_star * fn, wn / (dt * c.inv_inertia[e]));
-    const double mr_f = (c.rolling[e] > 0.0 && w2 > 0.0) ? -mr_mag / wn : 0.0;
+    const double mr_mag = std::min(rolling * r_star * fn, wn / (dt * c.inv_inertia[e]));
+    const double mr_f = (rolling > 0.0 && w2 > 0.0) ? -mr_mag / wn : 0.0;
     const double mrx = mr_f * wrx, mry = mr_f * wry, mrz = mr_f * wrz;
     // Force on i and the torques on both.
     c.fx[e] = ftx - fn * nx;
@@ -861,6 +875,7 @@ void System::ComputeForces() {
   const Plane* planes = config_.planes.data();
 
   const bool compact = config_.sleep.enabled;
+  const bool one_material = m.particle_material >= 0;
   if (compact && !m.busy_valid) RefreshBusy();
   if (!m.near_valid) BuildNear();
   if (!m.walls_valid) ListWallVisits();
@@ -927,13 +942,16 @@ void System::ComputeForces() {
             }
             if (piece) break;
           }
-          // Gather what the force law needs, one contact at a time (no branches).
+          // Gather what the force law needs, one contact at a time (no branches). When all the
+          // particles are of one material (the common case), so is every pair.
           bool uniform = true;
           for (size_t b = 0; b < nb; ++b) {
             const int32_t i = batch.i[b], j = batch.j[b], k = batch.k[b];
-            const int32_t pair = mat[i] * nm + mat[j];
-            batch.pair[b] = pair;
-            uniform = uniform && pair == batch.pair[0];
+            if (!one_material) {
+              const int32_t pair = mat[i] * nm + mat[j];
+              batch.pair[b] = pair;
+              uniform = uniform && pair == batch.pair[0];
+            }
             const double ri = radius[i], rj = radius[j];
             Put(batch.dx, batch.dy, batch.dz, b, x[j] - x[i]);
             Put(batch.dvx, batch.dvy, batch.dvz, b, v[j] - v[i]);
@@ -945,21 +963,25 @@ void System::ComputeForces() {
             batch.inv_inertia[b] = inv_inertia[i] + inv_inertia[j];
             Put(batch.sx, batch.sy, batch.sz, b, (batch.was[b] ? 1.0 : 0.0) * shear[k]);
           }
-          // Material constants: one broadcast when the batch holds one material pair (the
-          // common case), else per contact.
-          for (size_t b = 0; b < nb; b = uniform ? nb : b + 1) {
-            const PairConstants& c = pc[batch.pair[b]];
-            const size_t end = uniform ? nb : b + 1;
-            std::fill(batch.e_star + b, batch.e_star + end, c.e_star);
-            std::fill(batch.g_star + b, batch.g_star + end, c.g_star);
-            std::fill(batch.damp + b, batch.damp + end, c.damp);
-            std::fill(batch.tangential_ratio + b, batch.tangential_ratio + end, c.tangential_ratio);
-            std::fill(batch.friction + b, batch.friction + end, c.friction);
-            std::fill(batch.rolling + b, batch.rolling + end, c.rolling_friction);
-          }
           // 2. Contact forces of the batch, one contact per SIMD lane (EvaluateContact, written
-          //    without branches).
-          PairForces(batch, nb);
+          //    without branches), with one material pair's constants for all (the common case)
+          //    or each contact's own.
+          if (one_material) {
+            PairForces<true>(batch, nb, pc[m.particle_material * nm + m.particle_material]);
+          } else if (nb > 0 && uniform) {
+            PairForces<true>(batch, nb, pc[batch.pair[0]]);
+          } else {
+            for (size_t b = 0; b < nb; ++b) {
+              const PairConstants& c = pc[batch.pair[b]];
+              batch.e_star[b] = c.e_star;
+              batch.g_star[b] = c.g_star;
+              batch.damp[b] = c.damp;
+              batch.tangential_ratio[b] = c.tangential_ratio;
+              batch.friction[b] = c.friction;
+              batch.rolling[b] = c.rolling_friction;
+            }
+            PairForces<false>(batch, nb, pc[0]);
+          }
           // 3. Accumulate in batch order (fixed by the data: deterministic).
           for (size_t b = 0; b < nb; ++b) {
             const int32_t i = batch.i[b], j = batch.j[b];

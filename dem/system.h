@@ -13,6 +13,8 @@
 
 namespace dem {
 
+struct PairConstants;  // dem/contact.h
+
 // An infinite plane wall: particles live on the side the normal points to.
 struct Plane {
   std::string name;
@@ -211,7 +213,9 @@ class System {
   void ListWallVisits();  // list the visited particles with plane candidates
   void FlushNear() const;  // the near slots' history back into the list's (Impl::near_k)
   struct ContactBatch;
-  void PairForces(ContactBatch& batch, size_t n);  // forces of a batch of touching pairs
+  // Forces of a batch of touching pairs; kOnePair: all of material pair `one`.
+  template <bool kOnePair>
+  void PairForces(ContactBatch& batch, size_t n, const PairConstants& one);
 
   struct Impl;
   MaterialTable materials_;
