@@ -152,6 +152,11 @@ struct System::Impl {
 
   std::vector<ContactBatch> batches;  // one per thread
   int32_t particle_material = -1;     // the material of every particle, or -1 (Rebuild)
+  // Every particle alike: one radius, mass and moment of inertia (the common, monodisperse bed;
+  // noted at Rebuild). The force pass then reads none of them per partner: a scattered load
+  // less per near pair and three per contact, on a bed whose arrays do not fit in the cache.
+  bool alike = false;
+  double alike_radius = 0, alike_inv_mass = 0, alike_inv_inertia = 0;
 
   std::vector<ContactRecord> pending;  // history to apply at the next build
   // The previous build's list and history, kept during a rebuild to carry the history over
@@ -439,6 +444,15 @@ void System::Rebuild() {
   m.particle_material = n > 0 ? p_.material[0] : -1;
   for (size_t i = 1; i < n && m.particle_material >= 0; ++i)
     if (p_.material[i] != m.particle_material) m.particle_material = -1;
+  m.alike = n > 0;
+  if (m.alike) {
+    m.alike_radius = p_.radius[0];
+    m.alike_inv_mass = p_.inv_mass[0];
+    m.alike_inv_inertia = p_.inv_inertia[0];
+  }
+  for (size_t i = 1; i < n && m.alike; ++i)
+    m.alike = p_.radius[i] == m.alike_radius && p_.inv_mass[i] == m.alike_inv_mass &&
+              p_.inv_inertia[i] == m.alike_inv_inertia;
   Permute(p_.awake, m.perm, m.scratch_u8, nt);
   for (size_t i = 0; i < n; ++i) m.index_of_id[p_.id[i]] = static_cast<int32_t>(i);
   // Mesh contact history follows its particles; candidates are found again at the next step.
@@ -876,6 +890,10 @@ void System::ComputeForces() {
 
   const bool compact = config_.sleep.enabled;
   const bool one_material = m.particle_material >= 0;
+  const bool alike = m.alike;  // each sum below is the one the per-particle arrays would give
+  const double alike_rsum = m.alike_radius + m.alike_radius;
+  const double alike_inv_m_star = m.alike_inv_mass + m.alike_inv_mass;
+  const double alike_inv_inertia = m.alike_inv_inertia + m.alike_inv_inertia;
   if (compact && !m.busy_valid) RefreshBusy();
   if (!m.near_valid) BuildNear();
   if (!m.walls_valid) ListWallVisits();
@@ -931,7 +949,7 @@ void System::ComputeForces() {
             // near list is made again whenever a particle wakes or falls asleep).
             for (int32_t q = q_begin; q < q_end; ++q) {
               const int32_t j = near_j[q];
-              const double rsum = ri + radius[j];
+              const double rsum = alike ? alike_rsum : ri + radius[j];
               const bool contact = Norm2(x[j] - xi) < rsum * rsum;
               batch.i[nb] = i;
               batch.j[nb] = j;
@@ -952,15 +970,16 @@ void System::ComputeForces() {
               batch.pair[b] = pair;
               uniform = uniform && pair == batch.pair[0];
             }
-            const double ri = radius[i], rj = radius[j];
+            const double ri = alike ? m.alike_radius : radius[i];
+            const double rj = alike ? m.alike_radius : radius[j];
             Put(batch.dx, batch.dy, batch.dz, b, x[j] - x[i]);
             Put(batch.dvx, batch.dvy, batch.dvz, b, v[j] - v[i]);
             Put(batch.ax, batch.ay, batch.az, b, ri * w[i] + rj * w[j]);
             Put(batch.wx, batch.wy, batch.wz, b, w[i] - w[j]);
             batch.ri[b] = ri;
             batch.rj[b] = rj;
-            batch.inv_m_star[b] = inv_mass[i] + inv_mass[j];
-            batch.inv_inertia[b] = inv_inertia[i] + inv_inertia[j];
+            batch.inv_m_star[b] = alike ? alike_inv_m_star : inv_mass[i] + inv_mass[j];
+            batch.inv_inertia[b] = alike ? alike_inv_inertia : inv_inertia[i] + inv_inertia[j];
             Put(batch.sx, batch.sy, batch.sz, b, (batch.was[b] ? 1.0 : 0.0) * shear[k]);
           }
           // 2. Contact forces of the batch, one contact per SIMD lane (EvaluateContact, written
