@@ -1,4 +1,4 @@
-// Resizing the large per-pair arrays that are made again at every neighbour-list build.
+// Growing and placing the large arrays that are made again at every neighbour-list build.
 #pragma once
 
 #include <sys/mman.h>

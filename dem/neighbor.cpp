@@ -96,29 +96,14 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
   // - asleep i: (0, asleep, 0, 0..1), (0, asleep, 1, -1..1), and the next slab's halves.
   // Without sleepers this is the usual forward half stencil of 13 cells and the own cell.
   struct RunSpec {
-    int ds, half, db, dc_lo;
+    int ds, half, db, dc_lo;  // slab offset, half (kOwnHalf: the particle's), row, first column
   };
-  static constexpr RunSpec kRuns[2][11] = {
-      {{0, 0, 0, 0},
-       {0, 0, 1, -1},
-       {0, 1, -1, -1},
-       {0, 1, 0, -1},
-       {0, 1, 1, -1},
-       {1, 0, -1, -1},
-       {1, 0, 0, -1},
-       {1, 0, 1, -1},
-       {1, 1, -1, -1},
-       {1, 1, 0, -1},
-       {1, 1, 1, -1}},
-      {{0, 1, 0, 0},
-       {0, 1, 1, -1},
-       {1, 0, -1, -1},
-       {1, 0, 0, -1},
-       {1, 0, 1, -1},
-       {1, 1, -1, -1},
-       {1, 1, 0, -1},
-       {1, 1, 1, -1}}};
-  static constexpr int kNumRuns[2] = {11, 8};
+  constexpr int kOwnHalf = -1;
+  static constexpr RunSpec kRuns[11] = {
+      {0, kOwnHalf, 0, 0}, {0, kOwnHalf, 1, -1},                   // own half, later cells
+      {0, 1, -1, -1},      {0, 1, 0, -1},        {0, 1, 1, -1},    // own slab's asleep half
+      {1, 0, -1, -1},      {1, 0, 0, -1},        {1, 0, 1, -1},    // next slab, awake half
+      {1, 1, -1, -1},      {1, 1, 0, -1},        {1, 1, 1, -1}};  // next slab, asleep half
   const auto cell_of = [&](int slab, int half, int b, int c) {
     return ((static_cast<int64_t>(2 * slab + half)) * n1 + b) * n2 + c;
   };
@@ -136,12 +121,13 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
           if (first == last) continue;
           int32_t lo[11], hi[11];
           int runs = 0;
-          for (int r = 0; r < kNumRuns[h]; ++r) {
-            const RunSpec& rs = kRuns[h][r];
-            const int a = s + rs.ds, b = c1 + rs.db;
+          for (int r = 0; r < 11; ++r) {
+            if (h == 1 && r >= 2 && r < 5) continue;  // an asleep i lies in that half itself
+            const RunSpec& rs = kRuns[r];
+            const int a = s + rs.ds, b = c1 + rs.db, half = rs.half == kOwnHalf ? h : rs.half;
             if (a >= n_[0] || b < 0 || b >= n1) continue;
-            lo[runs] = cell_start_[cell_of(a, rs.half, b, std::max(c2 + rs.dc_lo, 0))];
-            hi[runs] = cell_start_[cell_of(a, rs.half, b, std::min(c2 + 1, n2 - 1)) + 1];
+            lo[runs] = cell_start_[cell_of(a, half, b, std::max(c2 + rs.dc_lo, 0))];
+            hi[runs] = cell_start_[cell_of(a, half, b, std::min(c2 + 1, n2 - 1)) + 1];
             ++runs;
           }
           for (int32_t i = first; i < last; ++i) {
