@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cassert>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -15,6 +16,13 @@
 #include "dem/triangle.h"
 
 namespace dem {
+
+namespace {
+// Wall-clock seconds, for PhaseTimes.
+double Now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+}  // namespace
 
 // Contacts gathered before one vectorised force evaluation (a block of particles' worth; a
 // particle with more near pairs than that comes in pieces).
@@ -899,9 +907,12 @@ void System::ComputeForces() {
   const double alike_rsum = m.alike_radius + m.alike_radius;
   const double alike_inv_m_star = m.alike_inv_mass + m.alike_inv_mass;
   const double alike_inv_inertia = m.alike_inv_inertia + m.alike_inv_inertia;
+  const double t_near = Now();
   if (compact && !m.busy_valid) RefreshBusy();
   if (!m.near_valid) BuildNear();
   if (!m.walls_valid) ListWallVisits();
+  const double t_pairs = Now();
+  phase_times_.near += t_pairs - t_near;
   const int32_t* wall_visit = m.wall_visit.data();
   const int32_t* near_j = m.near_j.data();
   const int32_t* near_off = m.near_off.data();
@@ -1076,6 +1087,7 @@ void System::ComputeForces() {
     worst = std::max(worst, m.slab_overlap[s]);
   }
   m.max_overlap = worst;
+  phase_times_.pairs += Now() - t_pairs;
 }
 
 StepStatus System::Step() {
@@ -1098,7 +1110,14 @@ StepStatus System::Step() {
   // not kept up to date (they are zeroed when it wakes: a sleeper is at rest in equilibrium).
   double max_v2 = 0;
   const bool sleeping = config_.sleep.enabled;
+  double t_phase = Now();
+  auto lap = [&t_phase](double& phase) {  // adds the time since the last lap to `phase`
+    const double now = Now();
+    phase += now - t_phase;
+    t_phase = now;
+  };
   if (sleeping && !m.active_valid) RefreshActive();
+  lap(phase_times_.sleep);
   const int32_t* active = m.active.data();
   const int64_t n_moving =
       sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
@@ -1144,10 +1163,18 @@ StepStatus System::Step() {
   for (Impl::MeshState& ms : m.meshes) ms.particle_drift += dt * std::sqrt(max_v2);
   m.near_bound += dt * std::sqrt(max_v2);
   if (!(m.near_bound <= 0.5 * m.near_skin)) m.near_valid = false;  // also on NaN
-  if (rebuild) Rebuild();
+  lap(phase_times_.integrate);
+  if (rebuild) {
+    Rebuild();
+    lap(phase_times_.rebuild);
+  }
 
-  ComputeForces();
-  if (!m.meshes.empty()) MeshForces();
+  ComputeForces();  // adds its own phases (near, pairs)
+  t_phase = Now();
+  if (!m.meshes.empty()) {
+    MeshForces();
+    lap(phase_times_.mesh);
+  }
 
   // Second half kick, with health checks.
   v = p_.v.data();
@@ -1158,6 +1185,7 @@ StepStatus System::Step() {
   inv_inertia = p_.inv_inertia.data();
   if (sleeping && !m.active_valid) RefreshActive();
   active = m.active.data();
+  lap(phase_times_.sleep);
   const int64_t n_kicked =
       sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
   max_v2 = 0;
@@ -1178,6 +1206,7 @@ StepStatus System::Step() {
   if (!clumps_.empty() && !clumps_.EndStep(p_, g, dt, num_threads_)) bad = 1;  // sum, kick
   time_ += dt;
   ++step_count_;
+  lap(phase_times_.integrate);
   if (config_.sleep.enabled && ++m.sleep_counter >= config_.sleep.check_every) {
     m.sleep_counter = 0;
     UpdateSleep();
@@ -1185,6 +1214,7 @@ StepStatus System::Step() {
       m.active_valid = false;  // a clump sleeps as a unit
       m.busy_valid = false;
     }
+    lap(phase_times_.sleep);
   }
 
   StepStatus status;

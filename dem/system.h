@@ -115,6 +115,18 @@ struct NeighborStats {
                               // -mesh, / the smaller diameter [-]
 };
 
+// Wall-clock seconds spent in each part of Step() since the system was made: the breakdown a
+// LIGGGHTS run prints at its end (Pair, Neigh, Modify...), for finding where a run's time goes.
+struct PhaseTimes {
+  double integrate = 0;  // the two half kicks, the drift test and the clumps' moves
+  double rebuild = 0;    // neighbour-list builds (and the storage reorder that goes with them)
+  double near = 0;       // near-list, busy-list and plane-visit builds
+  double pairs = 0;      // particle-particle and particle-plane forces
+  double mesh = 0;       // particle-mesh forces (with the mesh's candidate lists)
+  double sleep = 0;      // sleep and wake checks, and the list of awake particles
+  double Total() const { return integrate + rebuild + near + pairs + mesh + sleep; }
+};
+
 // Wrench of the particles on a mesh during the last step, world frame.
 struct MeshWrench {
   Vec3 force;   // sum of the contact forces on the mesh [N]
@@ -152,6 +164,7 @@ class System {
   void set_time(double t) { time_ = t; }
   int64_t step_count() const { return step_count_; }
   NeighborStats neighbor_stats() const;
+  const PhaseTimes& phase_times() const { return phase_times_; }
   // Force exerted by the particles on plane k during the last step [N].
   Vec3 plane_force(int k) const { return plane_force_[k]; }
 
@@ -225,6 +238,7 @@ class System {
   std::vector<Vec3> plane_force_;
   double time_ = 0;
   int64_t step_count_ = 0;
+  PhaseTimes phase_times_;
   int64_t next_id_ = 0;
   int64_t builds_ = 0;
   int num_threads_ = 1;

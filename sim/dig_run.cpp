@@ -1,6 +1,7 @@
 #include "sim/dig_run.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -121,6 +122,8 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
   double total = 0;
   for (int p = 1; p <= dig.passes; ++p) total += Trajectory(dig.trajectory).end_time() + 0.3;
   Progress progress("dig", total, options.quiet);
+  const auto wall0 = std::chrono::steady_clock::now();
+  const dem::PhaseTimes phases0 = system->phase_times();
   const double t_start = system->time();
   const int64_t step0 = system->step_count();
   int64_t particle_steps = 0;
@@ -296,6 +299,10 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
                summary.simulated, summary.peak_force, summary.mean_force, summary.peak_torque,
                static_cast<long long>(system->neighbor_stats().builds),
                static_cast<double>(particle_steps) / std::max<int64_t>(1, summary.steps));
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  std::fprintf(stderr, "scoopsim: dig: %.1f s wall: %s\n", wall,
+               PhaseBreakdown(PhasesSince(system->phase_times(), phases0), wall).c_str());
   if (options.dig_summary) *options.dig_summary = summary;
   return status;
 }

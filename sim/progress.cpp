@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <utility>
+#include <vector>
 
 namespace sim {
 namespace {
@@ -81,6 +82,54 @@ void Progress::Finish(double sim_time, int64_t particle_steps) {
       Line(label_, total_time_, sim_time, particle_steps, Seconds(now - start_), true);
   std::fprintf(stderr, tty_ ? "\r%s\x1b[K\n" : "%s\n", line.c_str());
   std::fflush(stderr);
+}
+
+namespace {
+
+struct NamedPhase {
+  const char* name;
+  double seconds;
+};
+
+std::vector<NamedPhase> Named(const dem::PhaseTimes& p, double wall) {
+  return {{"pairs", p.pairs},   {"integrate", p.integrate}, {"rebuild", p.rebuild},
+          {"near", p.near},     {"mesh", p.mesh},           {"sleep", p.sleep},
+          {"other", std::max(0.0, wall - p.Total())}};
+}
+
+}  // namespace
+
+dem::PhaseTimes PhasesSince(const dem::PhaseTimes& now, const dem::PhaseTimes& before) {
+  dem::PhaseTimes d;
+  d.integrate = now.integrate - before.integrate;
+  d.rebuild = now.rebuild - before.rebuild;
+  d.near = now.near - before.near;
+  d.pairs = now.pairs - before.pairs;
+  d.mesh = now.mesh - before.mesh;
+  d.sleep = now.sleep - before.sleep;
+  return d;
+}
+
+std::string PhaseBreakdown(const dem::PhaseTimes& phases, double wall) {
+  std::string line;
+  for (const NamedPhase& p : Named(phases, wall)) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%s%s %.1f s (%.1f%%)", line.empty() ? "" : ", ", p.name,
+                  p.seconds, 100.0 * p.seconds / std::max(wall, 1e-12));
+    line += buf;
+  }
+  return line;
+}
+
+std::string PhaseJson(const dem::PhaseTimes& phases, double wall, double steps) {
+  std::string json;
+  for (const NamedPhase& p : Named(phases, wall)) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%s\"ms_%s\":%.4f", json.empty() ? "" : ",", p.name,
+                  1e3 * p.seconds / std::max(steps, 1.0));
+    json += buf;
+  }
+  return json;
 }
 
 }  // namespace sim

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <string>
 
+#include "dem/system.h"
+
 namespace sim {
 
 class Progress {
@@ -25,5 +27,13 @@ class Progress {
   double log_period_;
   std::chrono::steady_clock::time_point start_, last_print_;
 };
+
+// The phase times spent between two readings of System::phase_times().
+dem::PhaseTimes PhasesSince(const dem::PhaseTimes& now, const dem::PhaseTimes& before);
+// One line of where `wall` seconds went, phase by phase with their shares, "other" being what no
+// phase holds (output, trajectory, bookkeeping between steps): "pairs 612.3 s (55.1%), ...".
+std::string PhaseBreakdown(const dem::PhaseTimes& phases, double wall);
+// The same as JSON members, in milliseconds a step: "\"ms_pairs\":1.234,...".
+std::string PhaseJson(const dem::PhaseTimes& phases, double wall, double steps);
 
 }  // namespace sim

@@ -426,20 +426,22 @@ int BenchStep(const BenchStepOptions& options) {
   if (!run(options.warm, &awake)) return kExitUnstable;
   const dem::NeighborStats before = system->neighbor_stats();
   awake = 0;
+  const dem::PhaseTimes phases0 = system->phase_times();
   const auto t0 = std::chrono::steady_clock::now();
   if (!run(options.steps, &awake)) return kExitUnstable;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const dem::NeighborStats ns = system->neighbor_stats();
   const double steps = static_cast<double>(std::max<int64_t>(options.steps, 1));
+  const std::string phases = PhaseJson(PhasesSince(system->phase_times(), phases0), wall, steps);
   std::printf(
       "{\"bench\":\"step\",\"particles\":%zu,\"awake_per_step\":%.0f,\"steps\":%lld,"
       "\"threads\":%d,\"wall_s\":%.4f,\"ms_per_step\":%.4f,\"awake_particle_steps_per_s\":%.4g,"
-      "\"neighbor_builds\":%lld,\"near_builds\":%lld,\"peak_rss_mb\":%.1f,"
+      "\"neighbor_builds\":%lld,\"near_builds\":%lld,%s,\"peak_rss_mb\":%.1f,"
       "\"state_hash\":\"%016llx\"}\n",
       system->particles().size(), awake / steps, static_cast<long long>(options.steps),
       system->num_threads(), wall, 1e3 * wall / steps, awake / wall,
       static_cast<long long>(ns.builds - before.builds),
-      static_cast<long long>(ns.near_builds - before.near_builds), PeakRssMb(),
+      static_cast<long long>(ns.near_builds - before.near_builds), phases.c_str(), PeakRssMb(),
       static_cast<unsigned long long>(system->StateHash()));
   return 0;
 }

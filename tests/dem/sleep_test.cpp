@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "tests/dem/test_util.h"
@@ -98,6 +99,31 @@ TEST(SleepTest, ApproachingMeshWakesItsZone) {
   }
   EXPECT_GT(expected, 0);
   EXPECT_EQ(s.awake_count(), expected);
+}
+
+// The phase clock (System::phase_times): each phase's share is a part of the wall time around
+// the steps (their sum cannot exceed it), and a phase whose work did not happen stays at zero:
+// no mesh, no mesh time; with a mesh near the layer, some. Pairs and integration always run.
+TEST(SleepTest, PhaseTimesAddUpToNoMoreThanTheWallTime) {
+  System s(test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05}), LayerConfig());
+  s.set_num_threads(1);
+  AddLayer(s);
+  const auto t0 = std::chrono::steady_clock::now();
+  test::StepOk(s, 300);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const PhaseTimes p = s.phase_times();
+  EXPECT_GT(p.pairs, 0.0);
+  EXPECT_GT(p.integrate, 0.0);
+  EXPECT_GT(p.rebuild, 0.0);  // the first step builds the list
+  EXPECT_GT(p.sleep, 0.0);    // checks every 10 steps
+  EXPECT_EQ(p.mesh, 0.0);
+  EXPECT_LE(p.Total(), wall);
+  const int k = s.AddMesh(test::Cube(0.004, 1));
+  MeshMotion mm;
+  mm.pose.position = {0.03, 0.03, 0.004 + 3 * kRadius};
+  s.SetMeshMotion(k, mm);
+  test::StepOk(s, 20);
+  EXPECT_GT(s.phase_times().mesh, 0.0);
 }
 
 // Contact history survives sleep, and waking needs no neighbour-list rebuild. Rows of touching
