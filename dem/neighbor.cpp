@@ -51,6 +51,17 @@ int64_t NeighborList::CellKey(const Vec3& x, int c[3]) const {
   return (static_cast<int64_t>(c[0]) * n_[1] + c[1]) * n_[2] + c[2];
 }
 
+void NeighborList::SlabSpan(const Vec3& lo, const Vec3& hi, int* first, int* last) const {
+  // The slab index of CellKey, a non-decreasing function of the slab-axis coordinate.
+  const auto slab = [&](const Vec3& x) {
+    const double u = (x[axis_[0]] - lo_[axis_[0]]) * inv_cell_;
+    const int k = std::isfinite(u) ? static_cast<int>(std::floor(std::clamp(u, -1.0, 1e9))) : 0;
+    return std::clamp(k, 0, n_[0] - 1);
+  };
+  *first = std::isfinite(lo[axis_[0]]) ? slab(lo) : 0;
+  *last = std::isfinite(hi[axis_[0]]) ? slab(hi) : n_[0] - 1;
+}
+
 void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit,
                                 std::vector<int32_t>* perm, int num_threads,
                                 const uint8_t* awake) {

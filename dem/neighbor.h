@@ -35,6 +35,11 @@ class NeighborList {
   void Build(const Vec3* x, const double* radius, size_t n, double skin, int num_threads,
              const int32_t* group = nullptr);
 
+  // The slabs that hold every particle whose position at the last ComputeOrder lay in the box
+  // [lo, hi]: first .. last (inclusive). Only the slab axis matters; positions outside the grid
+  // fall into its boundary slabs, as they do when sorted.
+  void SlabSpan(const Vec3& lo, const Vec3& hi, int* first, int* last) const;
+
   size_t num_pairs() const { return partner.size(); }
   int num_slabs() const { return static_cast<int>(slab_start.size()) - 1; }
 

@@ -72,6 +72,9 @@ struct System::Impl {
                                   // the shear of a pair that did not is stale and reads as zero
   std::vector<Vec3> x_build;      // positions at the last build [m] (N)
   double drift_bound = 0;         // upper bound on any displacement since the last build [m]
+  // Whether each particle has been on the active list since the last build (N): only those
+  // can have moved, so a sleeper that has not sits exactly at x_build.
+  std::vector<uint8_t> moved;
   double asleep_drift = 0;  // largest displacement since the last build of the particles asleep
                             // at the last RefreshActive (they move no more) [m]
   double skin = 0;
@@ -154,7 +157,8 @@ struct System::Impl {
   std::vector<int32_t> slab_order;
   int odd_from = 0;
   bool walls_valid = false;
-  std::vector<uint8_t> scratch_busy;  // RefreshBusy's marks (N)
+  std::vector<uint8_t> scratch_busy;        // RefreshBusy's marks (N)
+  std::vector<uint8_t> scratch_slab_awake;  // and whether each slab holds an awake particle
   bool busy_valid = false;
   bool active_valid = false;
 
@@ -603,6 +607,7 @@ void System::Rebuild() {
   }
   m.drift_bound = 0;
   m.asleep_drift = 0;
+  m.moved.assign(n, 0);  // RefreshActive marks the particles it lets move
   m.list_valid = true;
   m.needs_rebuild = false;
   m.active_valid = false;
@@ -629,11 +634,31 @@ void System::RefreshBusy() {
   // on the data only).
   std::vector<uint8_t>& flag = m.scratch_busy;
   flag.resize(n);
+  // A pair's partner lies in its owner's slab or the next, so a slab is busy-free when neither
+  // it nor the next holds an awake particle: its lists need not be read (most slabs of a
+  // sleeping bed).
+  std::vector<uint8_t>& slab_awake = m.scratch_slab_awake;
+  slab_awake.assign(ns + 1, 0);
 #pragma omp parallel for schedule(static) num_threads(num_threads_)
-  for (int64_t i = 0; i < n; ++i) {
-    bool busy = awake[i] && wall_start[i + 1] > wall_start[i];
-    for (int32_t k = start[i]; k < start[i + 1] && !busy; ++k) busy = awake[i] || awake[partner[k]];
-    flag[i] = busy;
+  for (int sl = 0; sl < ns; ++sl)
+    for (int32_t i = m.list.slab_start[sl]; i < m.list.slab_start[sl + 1]; ++i)
+      if (awake[i]) {
+        slab_awake[sl] = 1;
+        break;
+      }
+#pragma omp parallel for schedule(dynamic, 4) num_threads(num_threads_)
+  for (int sl = 0; sl < ns; ++sl) {
+    const int32_t lo = m.list.slab_start[sl], hi = m.list.slab_start[sl + 1];
+    if (!slab_awake[sl] && !slab_awake[sl + 1]) {
+      std::fill(flag.begin() + lo, flag.begin() + hi, uint8_t{0});
+      continue;
+    }
+    for (int32_t i = lo; i < hi; ++i) {
+      bool busy = awake[i] && wall_start[i + 1] > wall_start[i];
+      for (int32_t k = start[i]; k < start[i + 1] && !busy; ++k)
+        busy = awake[i] || awake[partner[k]];
+      flag[i] = busy;
+    }
   }
   m.slab_busy.assign(ns + 1, 0);
 #pragma omp parallel for schedule(static) num_threads(num_threads_)
@@ -1558,8 +1583,14 @@ void System::UpdateSleep() {
     std::vector<Vec3> box;
     Vec3 lo, hi;
     TriangleBoxes(ms.world, tris, d_out, &box, &lo, &hi);
+    // Only the slabs that can hold a centre in the box: no particle has moved more than half the
+    // skin since the list was built (else it would have been built again this step).
+    const Vec3 reach{m.skin, m.skin, m.skin};
+    int s0 = 0, s1 = -1;
+    m.list.SlabSpan(lo - reach, hi + reach, &s0, &s1);
+    const int64_t i0 = m.list.slab_start[s0], i1 = m.list.slab_start[s1 + 1];
 #pragma omp parallel for schedule(static) num_threads(num_threads_)
-    for (size_t i = 0; i < n; ++i) {
+    for (int64_t i = i0; i < i1; ++i) {
       const Vec3 c = p_.x[i];
       if (zone[i] == 2 || !InBox(c, lo, hi, 0.0)) continue;
       double best2 = d_out * d_out;
@@ -1627,6 +1658,10 @@ void System::RefreshActive() {
   const bool built = m.list_valid && m.x_build.size() == p_.size();
   const int64_t n = static_cast<int64_t>(p_.size());
   const uint8_t* awake = p_.awake.data();
+  // Clumps place their spheres themselves: then any sleeper may have moved.
+  const bool tracked = m.moved.size() == p_.size() && clumps_.empty();
+  if (!tracked) m.moved.assign(n, 1);
+  uint8_t* moved = m.moved.data();
   // Count per chunk, then fill each chunk's run in storage order (chunks: the result does not
   // depend on the thread count).
   const int64_t chunks = 64, per = (n + chunks - 1) / chunks;
@@ -1638,7 +1673,7 @@ void System::RefreshActive() {
     for (int64_t i = c * per; i < std::min(n, (c + 1) * per); ++i) {
       if (awake[i]) {
         ++count;
-      } else if (built) {
+      } else if (built && moved[i]) {
         asleep2 = std::max(asleep2, Norm2(p_.x[i] - m.x_build[i]));
       }
     }
@@ -1651,7 +1686,10 @@ void System::RefreshActive() {
   for (int64_t c = 0; c < chunks; ++c) {
     int64_t k = at[c];
     for (int64_t i = c * per; i < std::min(n, (c + 1) * per); ++i)
-      if (awake[i]) active[k++] = static_cast<int32_t>(i);
+      if (awake[i]) {
+        active[k++] = static_cast<int32_t>(i);
+        moved[i] = 1;
+      }
   }
   m.asleep_drift = std::sqrt(asleep2);
   m.active_valid = true;
