@@ -168,7 +168,8 @@ struct System::Impl {
   // noted at Rebuild). The force pass then reads none of them per partner: a scattered load
   // less per near pair and three per contact, on a bed whose arrays do not fit in the cache.
   bool alike = false;
-  double alike_radius = 0, alike_inv_mass = 0, alike_inv_inertia = 0;
+  double alike_radius = 0, alike_mass = 0, alike_inv_mass = 0, alike_inv_inertia = 0;
+  size_t alike_n = 0;  // particle count when `alike` was noted (an added particle voids it)
 
   std::vector<ContactRecord> pending;  // history to apply at the next build
   // The previous build's list and history, kept during a rebuild to carry the history over
@@ -459,12 +460,14 @@ void System::Rebuild() {
   m.alike = n > 0;
   if (m.alike) {
     m.alike_radius = p_.radius[0];
+    m.alike_mass = p_.mass[0];
     m.alike_inv_mass = p_.inv_mass[0];
     m.alike_inv_inertia = p_.inv_inertia[0];
   }
   for (size_t i = 1; i < n && m.alike; ++i)
-    m.alike = p_.radius[i] == m.alike_radius && p_.inv_mass[i] == m.alike_inv_mass &&
-              p_.inv_inertia[i] == m.alike_inv_inertia;
+    m.alike = p_.radius[i] == m.alike_radius && p_.mass[i] == m.alike_mass &&
+              p_.inv_mass[i] == m.alike_inv_mass && p_.inv_inertia[i] == m.alike_inv_inertia;
+  m.alike_n = n;
   Permute(p_.awake, m.perm, m.scratch_u8, nt);
   for (size_t i = 0; i < n; ++i) m.index_of_id[p_.id[i]] = static_cast<int32_t>(i);
   // Mesh contact history follows its particles; candidates are found again at the next step.
@@ -1146,15 +1149,20 @@ StepStatus System::Step() {
   const int32_t* active = m.active.data();
   const int64_t n_moving =
       sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
+  // Alike particles (Impl::alike, still valid when nothing was added or removed since): the
+  // same numbers as the per-particle arrays hold, without streaming them.
+  bool alike = m.alike && m.alike_n == n && !m.needs_rebuild;
+  double alike_mass = m.alike_mass, alike_inv_mass = m.alike_inv_mass,
+         alike_inv_inertia = m.alike_inv_inertia;
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : max_v2)
   for (int64_t a = 0; a < n_moving; ++a) {
     const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
-    v[i] += (h * inv_mass[i]) * f[i];
-    w[i] += (h * inv_inertia[i]) * t[i];
+    v[i] += (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
+    w[i] += (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
     x[i] += dt * v[i];
     max_v2 = std::max(max_v2, Norm2(v[i]));
     // Start this step's force with gravity (contacts add to it in ComputeForces).
-    f[i] = mass[i] * g;
+    f[i] = (alike ? alike_mass : mass[i]) * g;
     t[i] = Vec3{};
   }
   if (!clumps_.empty()) {  // rigid clumps (dem/clump.h): move the bodies, place their spheres
@@ -1215,14 +1223,17 @@ StepStatus System::Step() {
       sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
   max_v2 = 0;
   int bad = 0;
+  alike = m.alike && m.alike_n == n && !m.needs_rebuild;
+  alike_inv_mass = m.alike_inv_mass;
+  alike_inv_inertia = m.alike_inv_inertia;
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max       \
                                                                               : max_v2) \
     reduction(|                                                                         \
               : bad)
   for (int64_t a = 0; a < n_kicked; ++a) {
     const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
-    v[i] += (h * inv_mass[i]) * f[i];
-    w[i] += (h * inv_inertia[i]) * t[i];
+    v[i] += (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
+    w[i] += (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
     const double v2 = Norm2(v[i]);
     // A finite v keeps x finite (x += dt v), so x need not be read here.
     if (!(std::isfinite(v2) && IsFinite(w[i]))) bad = 1;
