@@ -41,25 +41,22 @@ void NeighborList::SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size
   count_.assign(cell_start_.size() - 1, 0);
 }
 
+int NeighborList::CellAlong(int g, const Vec3& x) const {
+  // Clamp: particles outside the grid share its boundary cells (still correct, only slower).
+  const double u = (x[axis_[g]] - lo_[axis_[g]]) * inv_cell_;
+  const int k = std::isfinite(u) ? static_cast<int>(std::floor(std::clamp(u, -1.0, 1e9))) : 0;
+  return std::clamp(k, 0, n_[g] - 1);
+}
+
 int64_t NeighborList::CellKey(const Vec3& x, int c[3]) const {
-  for (int g = 0; g < 3; ++g) {
-    // Clamp: particles outside the grid share its boundary cells (still correct, only slower).
-    const double u = (x[axis_[g]] - lo_[axis_[g]]) * inv_cell_;
-    int k = std::isfinite(u) ? static_cast<int>(std::floor(std::clamp(u, -1.0, 1e9))) : 0;
-    c[g] = std::clamp(k, 0, n_[g] - 1);
-  }
+  for (int g = 0; g < 3; ++g) c[g] = CellAlong(g, x);
   return (static_cast<int64_t>(c[0]) * n_[1] + c[1]) * n_[2] + c[2];
 }
 
 void NeighborList::SlabSpan(const Vec3& lo, const Vec3& hi, int* first, int* last) const {
-  // The slab index of CellKey, a non-decreasing function of the slab-axis coordinate.
-  const auto slab = [&](const Vec3& x) {
-    const double u = (x[axis_[0]] - lo_[axis_[0]]) * inv_cell_;
-    const int k = std::isfinite(u) ? static_cast<int>(std::floor(std::clamp(u, -1.0, 1e9))) : 0;
-    return std::clamp(k, 0, n_[0] - 1);
-  };
-  *first = std::isfinite(lo[axis_[0]]) ? slab(lo) : 0;
-  *last = std::isfinite(hi[axis_[0]]) ? slab(hi) : n_[0] - 1;
+  // CellAlong(0, .) is a non-decreasing function of the slab-axis coordinate.
+  *first = std::isfinite(lo[axis_[0]]) ? CellAlong(0, lo) : 0;
+  *last = std::isfinite(hi[axis_[0]]) ? CellAlong(0, hi) : n_[0] - 1;
 }
 
 void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit,

@@ -48,6 +48,7 @@ class NeighborList {
   std::vector<int32_t> slab_start;  // particle range of each slab (num_slabs + 1)
 
  private:
+  int CellAlong(int g, const Vec3& x) const;  // cell index along grid axis g, clamped
   int64_t CellKey(const Vec3& x, int c[3]) const;
 
   Vec3 lo_;

@@ -169,7 +169,9 @@ struct System::Impl {
   // less per near pair and three per contact, on a bed whose arrays do not fit in the cache.
   bool alike = false;
   double alike_radius = 0, alike_mass = 0, alike_inv_mass = 0, alike_inv_inertia = 0;
-  size_t alike_n = 0;  // particle count when `alike` was noted (an added particle voids it)
+  // Whether `alike` still describes the particles: anything that adds or removes one asks for a
+  // rebuild, which notes it again.
+  bool AlikeNow() const { return alike && !needs_rebuild; }
 
   std::vector<ContactRecord> pending;  // history to apply at the next build
   // The previous build's list and history, kept during a rebuild to carry the history over
@@ -467,7 +469,6 @@ void System::Rebuild() {
   for (size_t i = 1; i < n && m.alike; ++i)
     m.alike = p_.radius[i] == m.alike_radius && p_.mass[i] == m.alike_mass &&
               p_.inv_mass[i] == m.alike_inv_mass && p_.inv_inertia[i] == m.alike_inv_inertia;
-  m.alike_n = n;
   Permute(p_.awake, m.perm, m.scratch_u8, nt);
   for (size_t i = 0; i < n; ++i) m.index_of_id[p_.id[i]] = static_cast<int32_t>(i);
   // Mesh contact history follows its particles; candidates are found again at the next step.
@@ -1149,9 +1150,9 @@ StepStatus System::Step() {
   const int32_t* active = m.active.data();
   const int64_t n_moving =
       sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
-  // Alike particles (Impl::alike, still valid when nothing was added or removed since): the
-  // same numbers as the per-particle arrays hold, without streaming them.
-  bool alike = m.alike && m.alike_n == n && !m.needs_rebuild;
+  // Alike particles (Impl::AlikeNow): the same numbers as the per-particle arrays hold, without
+  // streaming them.
+  bool alike = m.AlikeNow();
   double alike_mass = m.alike_mass, alike_inv_mass = m.alike_inv_mass,
          alike_inv_inertia = m.alike_inv_inertia;
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max : max_v2)
@@ -1223,7 +1224,7 @@ StepStatus System::Step() {
       sleeping ? static_cast<int64_t>(m.active.size()) : static_cast<int64_t>(n);
   max_v2 = 0;
   int bad = 0;
-  alike = m.alike && m.alike_n == n && !m.needs_rebuild;
+  alike = m.AlikeNow();  // noted again if this step rebuilt
   alike_inv_mass = m.alike_inv_mass;
   alike_inv_inertia = m.alike_inv_inertia;
 #pragma omp parallel for schedule(static) num_threads(num_threads_) reduction(max       \
