@@ -21,7 +21,7 @@ fi
 build/scoopsim bed "$scene" -o "$work/bed.h5" --threads "$threads" -q
 for mode in true false; do
   # Only the switch changes: the scene's other sleep keys (wake zone, quiet speed) stay.
-  sed -e "/^sleep:/s|enabled: *true|enabled: $mode|" \
+  sed -e "/^sleep:/s|enabled: *[a-z]*|enabled: $mode|" \
       -e "s|^\(  *\)count: \(.*\)|&\n\1file: $work/bed.h5|" "$scene" > "$work/scene_$mode.yaml"
   sed -i "s|mesh: \.\./assets|mesh: $PWD/assets|; s|^materials: materials.yaml|materials: $PWD/scenes/materials.yaml|" \
       "$work/scene_$mode.yaml"
