@@ -112,8 +112,13 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
   const dem::Vec3 origin_shift{dig.trajectory.pivot_start.x, dig.trajectory.pivot_start.y, 0};
   const double dt = scene.time_step;
   const double lowest_level = LowestBelowPivot(*mesh_ptr, kLevel, dig.trajectory.pivot_offset);
+  const Trajectory path(dig.trajectory);
+  // The descent from clear of the bed goes at the approach's speed (the first move's, when it
+  // translates), else at the study's 0.14 m/s.
   const double approach_speed =
-      dig.trajectory.approach.enabled ? dig.trajectory.approach.speed : 0.14;
+      !path.spec().moves.empty() && path.spec().moves[0].kind == Move::Kind::kTranslate
+          ? path.spec().moves[0].speed
+          : 0.14;
 
   dem::SleepConfig sleep = scene.sleep;
   system->set_sleep(sleep);
@@ -157,14 +162,11 @@ int RunDig(const Scene& scene, const RunOptions& options, dem::System* system, H
     // Where the pass goes: the level scoop's lowest point at pass * bite below the surface.
     TrajectorySpec spec = dig.trajectory;
     spec.pivot_start.z = surface - pass * dig.bite_depth - lowest_level;
-    if (spec.approach.enabled) spec.pivot_start.z += spec.approach.amount;
+    spec.pivot_start.z -= path.LeadingDrop();
     PassPlan plan{Trajectory(spec)};
-    // The pass starts with the first segment (Table 1's 1.8 s before the approach are the
-    // study's bed generation).
-    plan.offset = 1e300;
-    for (const TrajectorySpec::Segment* s :
-         {&spec.approach, &spec.rotation1, &spec.linear, &spec.rotation2})
-      if (s->enabled) plan.offset = std::min(plan.offset, s->start);
+    // The pass starts with the first move (Table 1's 1.8 s before the approach are the study's
+    // bed generation).
+    plan.offset = plan.trajectory.start_time();
     const dem::MeshMotion first = MotionAt(plan, plan.descent_time, heading, origin_shift);
     if (dig.start_buried) {
       // The tool is placed in the bed at its start pose (as the testbed's scoop was inserted by

@@ -325,25 +325,41 @@ void ParseMaterials(const std::string& file, const YAML::Node& root, dem::Materi
 
 constexpr double kDeg = kPi / 180.0;
 
-// One trajectory segment: `off`, or a map overriding the preset's start, speed and amount.
+// One move of a preset, by its name (approach, rotation1, linear, rotation2): `off` removes it, a
+// map overrides its start, speed and amount (adding it when the preset has none).
 // `speed_key`/`amount_key` name the keys (speed/distance in m/s and m, rate/angle in deg/s, deg).
 void ParseSegment(const std::string& file, const MapReader& parent, const char* key,
-                  const char* speed_key, const char* amount_key, double unit,
-                  TrajectorySpec::Segment* seg) {
+                  const char* speed_key, const char* amount_key, double unit, const Move& shape,
+                  std::vector<Move>* moves) {
   if (!parent.Has(key)) return;
+  auto it = std::find_if(moves->begin(), moves->end(), [&](const Move& m) { return m.name == key; });
   const YAML::Node node = parent.node()[key];
   if (node.IsScalar() && node.Scalar() == "off") {
-    seg->enabled = false;
+    if (it != moves->end()) moves->erase(it);
     return;
   }
   const MapReader m(file, node, parent.Key(key), {"start", speed_key, amount_key});
-  const bool was = seg->enabled;
-  seg->start = m.Number("start", seg->start, "a number >= 0 (s)", NonNegative);
+  const bool was = it != moves->end();
+  Move seg = was ? *it : shape;
+  if (!was) seg.start = 0;
+  seg.start = m.Number("start", seg.start, "a number >= 0 (s)", NonNegative);
   if (!was && !m.Has(speed_key)) m.Need(speed_key, "a number > 0");
   if (!was && !m.Has(amount_key)) m.Need(amount_key, "a number > 0");
-  seg->speed = m.Number(speed_key, seg->speed / unit, "a number > 0", Positive) * unit;
-  seg->amount = m.Number(amount_key, seg->amount / unit, "a number > 0", Positive) * unit;
-  seg->enabled = true;
+  seg.speed = m.Number(speed_key, seg.speed / unit, "a number > 0", Positive) * unit;
+  seg.amount = m.Number(amount_key, seg.amount / unit, "a number > 0", Positive) * unit;
+  if (was) {
+    *it = seg;
+  } else {
+    // In the order approach, rotation1, linear, rotation2.
+    static const char* const kOrder[] = {"approach", "rotation1", "linear", "rotation2"};
+    auto rank = [](const std::string& n) {
+      return std::find_if(std::begin(kOrder), std::end(kOrder),
+                          [&](const char* o) { return n == o; }) - std::begin(kOrder);
+    };
+    auto at = std::find_if(moves->begin(), moves->end(),
+                           [&](const Move& x) { return rank(x.name) > rank(key); });
+    moves->insert(at, seg);
+  }
 }
 
 void ParseDig(const std::string& file, const YAML::Node& node, int bed_material, Scene* scene) {
@@ -425,10 +441,15 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
       tr.Number("initial_pitch", t.initial_pitch / kDeg, "a number in [-180, 180] (deg)",
                 [](double v) { return v >= -180 && v <= 180; }) *
       kDeg;
-  ParseSegment(file, tr, "approach", "speed", "distance", 1.0, &t.approach);
-  ParseSegment(file, tr, "rotation1", "rate", "angle", kDeg, &t.rotation1);
-  ParseSegment(file, tr, "linear", "speed", "distance", 1.0, &t.linear);
-  ParseSegment(file, tr, "rotation2", "rate", "angle", kDeg, &t.rotation2);
+  const dem::Vec3 pitch_down{0, -1, 0};
+  ParseSegment(file, tr, "approach", "speed", "distance", 1.0,
+               Translate("approach", {0, 0, -1}, 1, 0), &t.moves);
+  ParseSegment(file, tr, "rotation1", "rate", "angle", kDeg,
+               Rotate("rotation1", pitch_down, 1, 0), &t.moves);
+  ParseSegment(file, tr, "linear", "speed", "distance", 1.0, Translate("linear", {1, 0, 0}, 1, 0),
+               &t.moves);
+  ParseSegment(file, tr, "rotation2", "rate", "angle", kDeg,
+               Rotate("rotation2", pitch_down, 1, 0), &t.moves);
   try {
     Trajectory check(t);
     (void)check;
@@ -442,7 +463,7 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
     throw InputError(file + ":" + std::to_string(LineOf(at ? at : traj_node)) +
                      ": dig.trajectory." + what);
   }
-  if (!t.approach.enabled && !t.rotation1.enabled && !t.linear.enabled && !t.rotation2.enabled)
+  if (t.moves.empty())
     Fail(file, LineOf(traj_node), "dig.trajectory", "at least one segment (preset or map)", "none");
 
   dig.passes = static_cast<int>(d.Integer("passes", 1, "an integer in [1, 100]",

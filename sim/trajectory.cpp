@@ -13,25 +13,20 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
-// A segment may start this much before the previous one ends: amount / speed rounds (0.028 m at
+// A move may start this much before the previous one ends: amount / speed rounds (0.028 m at
 // 0.14 m/s ends at 2.0000000000000004 s).
 constexpr double kOverlapSlack = 1e-9;  // [s]
 
-using Segment = TrajectorySpec::Segment;
+double EndOf(const Move& m) { return m.start + m.amount / m.speed; }
 
-double EndOf(const Segment& s) { return s.start + s.amount / s.speed; }
-
-// How far the segment has gone at time t [m or rad]: exactly `amount` once it has ended.
-double Progress(const Segment& s, double t) {
-  if (!s.enabled || t <= s.start) return 0;
-  if (t >= EndOf(s)) return s.amount;
-  return s.speed * (t - s.start);
+// How far the move has gone at time t [m, rad or s]: exactly `amount` once it has ended.
+double Progress(const Move& m, double t) {
+  if (t <= m.start) return 0;
+  if (t >= EndOf(m)) return m.amount;
+  return m.speed * (t - m.start);
 }
 
-// The segment's speed while it is active ([start, end)), else 0.
-double Rate(const Segment& s, double t) {
-  return s.enabled && t >= s.start && t < EndOf(s) ? s.speed : 0;
-}
+bool Active(const Move& m, double t) { return t >= m.start && t < EndOf(m); }
 
 [[noreturn]] void Invalid(const std::string& field, const std::string& expected, double got) {
   std::ostringstream msg;
@@ -48,27 +43,68 @@ void CheckFinite(const std::string& field, const dem::Vec3& v) {
   }
 }
 
+bool Same(const dem::Vec3& a, const dem::Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
 }  // namespace
+
+Move Translate(std::string name, const dem::Vec3& direction, double speed, double distance,
+               double start) {
+  Move m;
+  m.kind = Move::Kind::kTranslate;
+  m.name = std::move(name);
+  m.axis = direction;
+  m.speed = speed;
+  m.amount = distance;
+  m.start = start;
+  return m;
+}
+
+Move Rotate(std::string name, const dem::Vec3& axis, double rate, double angle, double start) {
+  Move m = Translate(std::move(name), axis, rate, angle, start);
+  m.kind = Move::Kind::kRotate;
+  return m;
+}
+
+Move RotateAbout(std::string name, const dem::Vec3& axis, double rate, double angle,
+                 const dem::Vec3& point, double start) {
+  Move m = Rotate(std::move(name), axis, rate, angle, start);
+  m.about_pivot = false;
+  m.point = point;
+  return m;
+}
+
+Move Hold(std::string name, double duration, double start) {
+  Move m;
+  m.kind = Move::Kind::kHold;
+  m.name = std::move(name);
+  m.speed = 1;
+  m.amount = duration;
+  m.start = start;
+  return m;
+}
+
+// The study's pitch rotations turn about world -y (theta decreases: the blade comes up).
+constexpr dem::Vec3 kPitchDown{0, -1, 0};
 
 TrajectorySpec Table1Preset() {
   TrajectorySpec s;
   s.initial_pitch = 90 * kDeg;
-  s.approach = {true, 1.8, 0.14, 0.028};  // until 2.0 s
-  s.rotation1 = {true, 2.0, 90 * kDeg, 90 * kDeg};
-  s.linear = {true, 3.0, 0.3, 0.3};
-  s.rotation2 = {true, 4.0, 90 * kDeg, 90 * kDeg};
+  s.moves = {Translate("approach", {0, 0, -1}, 0.14, 0.028, 1.8),  // until 2.0 s
+             Rotate("rotation1", kPitchDown, 90 * kDeg, 90 * kDeg, 2.0),
+             Translate("linear", {1, 0, 0}, 0.3, 0.3, 3.0),
+             Rotate("rotation2", kPitchDown, 90 * kDeg, 90 * kDeg, 4.0)};
   return s;
 }
 
 TrajectorySpec Table4Preset() {
   TrajectorySpec s;
   s.initial_pitch = 90 * kDeg;
-  s.approach = {true, 0.0, 0.14, 0.028};  // for 0.2 s
-  // "Right after": each segment starts where the previous one ends, computed, so that rounding
-  // never makes two overlap.
-  s.rotation1 = {true, 0.2, 30 * kDeg, 90 * kDeg};
-  s.linear = {true, EndOf(s.rotation1), 0.1, 0.3};
-  s.rotation2 = {true, EndOf(s.linear), 30 * kDeg, 90 * kDeg};
+  // "Right after": each move starts where the previous one ends, computed, so that rounding never
+  // makes two overlap.
+  s.moves = {Translate("approach", {0, 0, -1}, 0.14, 0.028, 0.0),  // for 0.2 s
+             Rotate("rotation1", kPitchDown, 30 * kDeg, 90 * kDeg, 0.2)};
+  s.moves.push_back(Translate("linear", {1, 0, 0}, 0.1, 0.3, EndOf(s.moves[1])));
+  s.moves.push_back(Rotate("rotation2", kPitchDown, 30 * kDeg, 90 * kDeg, EndOf(s.moves[2])));
   return s;
 }
 
@@ -83,50 +119,102 @@ Trajectory::Trajectory(const TrajectorySpec& spec) : spec_(spec) {
   if (!std::isfinite(spec.initial_pitch)) {
     Invalid("initial_pitch", "a finite angle [rad]", spec.initial_pitch);
   }
-  const std::pair<const char*, const Segment*> segments[] = {{"approach", &spec.approach},
-                                                             {"rotation1", &spec.rotation1},
-                                                             {"linear", &spec.linear},
-                                                             {"rotation2", &spec.rotation2}};
-  const char* previous = nullptr;
-  double previous_end = 0;
-  for (const auto& [name, seg] : segments) {
-    if (!seg->enabled) continue;
-    const std::string n = name;
-    if (!(seg->start >= 0) || !std::isfinite(seg->start)) {
-      Invalid(n + ".start", "a finite time >= 0 [s]", seg->start);
+  const Move* previous = nullptr;
+  for (size_t i = 0; i < spec_.moves.size(); ++i) {
+    Move& m = spec_.moves[i];
+    if (m.name.empty()) m.name = "moves[" + std::to_string(i) + "]";
+    const std::string& n = m.name;
+    const bool hold = m.kind == Move::Kind::kHold;
+    const bool after_previous = m.start == Move::kAfterPrevious;
+    if (!after_previous && !(m.start >= 0 && std::isfinite(m.start))) {
+      Invalid(n + ".start", "a finite time >= 0 [s]", m.start);
     }
-    if (!(seg->speed > 0) || !std::isfinite(seg->speed)) {
-      Invalid(n + ".speed", "a finite number > 0", seg->speed);
+    if (!(m.speed > 0) || !std::isfinite(m.speed)) {
+      Invalid(n + (m.kind == Move::Kind::kRotate ? ".rate" : ".speed"), "a finite number > 0",
+              m.speed);
     }
-    if (!(seg->amount >= 0) || !std::isfinite(seg->amount)) {
-      Invalid(n + ".amount", "a finite number >= 0", seg->amount);
+    if (!(m.amount >= 0) || !std::isfinite(m.amount)) {
+      Invalid(n + (hold ? ".duration" : m.kind == Move::Kind::kRotate ? ".angle" : ".distance"),
+              "a finite number >= 0", m.amount);
     }
-    if (previous != nullptr && seg->start < previous_end - kOverlapSlack) {
+    if (!hold) {
+      const char* what = m.kind == Move::Kind::kRotate ? ".axis" : ".direction";
+      CheckFinite(n + what, m.axis);
+      const double length = dem::Norm(m.axis);
+      if (!(length > 0)) Invalid(n + what, "a vector of non-zero length", length);
+      if (length != 1) m.axis = (1 / length) * m.axis;
+      if (m.about_pivot) m.point = spec_.pivot_offset;
+      CheckFinite(n + ".point", m.point);
+    }
+    const double previous_end = previous ? EndOf(*previous) : 0.0;
+    if (after_previous) {
+      m.start = previous_end;
+    } else if (previous != nullptr && m.start < previous_end - kOverlapSlack) {
       std::ostringstream msg;
-      msg << n << ".start: expected a time >= " << previous_end << " s (the end of " << previous
-          << "; segments run in the order approach, rotation1, linear, rotation2 without "
-             "overlapping), got "
-          << seg->start;
+      msg << n << ".start: expected a time >= " << previous_end << " s (the end of "
+          << previous->name << "; moves run in order without overlapping), got " << m.start;
       throw std::invalid_argument(msg.str());
     }
-    previous = name;
-    previous_end = EndOf(*seg);
-    end_time_ = std::max(end_time_, previous_end);
+    if (previous == nullptr) start_time_ = m.start;
+    previous = &m;
+    end_time_ = std::max(end_time_, EndOf(m));
   }
+}
+
+double Trajectory::LeadingDrop() const {
+  double drop = 0;
+  for (const Move& m : spec_.moves) {
+    if (m.kind == Move::Kind::kRotate) break;
+    if (m.kind == Move::Kind::kTranslate) drop += m.axis.z * m.amount;
+  }
+  return drop;
 }
 
 ScoopKinematics Trajectory::At(double t) const {
   const TrajectorySpec& s = spec_;
+  // The pose as: pivot (a point of l_scoop) at `pivot` in world, orientation
+  // AxisAngle(axis, angle) * base. Rotations about the current axis (or its opposite) add to
+  // `angle`, so that a path of pitch rotations evaluates theta = initial - p1 - p2 exactly.
+  dem::Vec3 pivot = s.pivot_start, point = s.pivot_offset;
+  dem::Vec3 axis{0, 1, 0};
+  double angle = s.initial_pitch;
+  dem::Quat base{0, 1, 0, 0};  // the level orientation R0
+  bool pitch_only = true;
+  dem::Vec3 pivot_velocity, angular_velocity;
+  for (const Move& m : s.moves) {
+    if (m.kind == Move::Kind::kHold || t < m.start) continue;
+    const double u = Progress(m, t);
+    const bool active = Active(m, t);
+    if (m.kind == Move::Kind::kTranslate) {
+      pivot = pivot + m.axis * u;
+      if (active) pivot_velocity += m.axis * m.speed;
+      continue;
+    }
+    if (!Same(m.point, point)) {
+      // The rotation's point becomes the pivot: where it is now in world.
+      const dem::Quat q = dem::AxisAngle(axis, angle) * base;
+      pivot = pivot + dem::Rotate(q, m.point - point);
+      point = m.point;
+    }
+    if (Same(m.axis, axis)) {
+      angle = angle + u;
+    } else if (Same(-1.0 * m.axis, axis)) {
+      angle = angle - u;
+    } else {
+      base = dem::AxisAngle(axis, angle) * base;
+      axis = m.axis;
+      angle = u;
+      pitch_only = false;
+    }
+    if (active) angular_velocity += m.axis * m.speed;
+  }
   ScoopKinematics k;
-  // Pivot: down by the approach, forward by the linear push; pitch: down by both rotations.
-  k.pivot = s.pivot_start + dem::Vec3{Progress(s.linear, t), 0, -Progress(s.approach, t)};
-  k.pitch = s.initial_pitch - Progress(s.rotation1, t) - Progress(s.rotation2, t);
-  k.pose.orientation = PitchOrientation(k.pitch);
-  k.pose.position = k.pivot - dem::Rotate(k.pose.orientation, s.pivot_offset);
-
-  // Twist: d(pitch)/dt about world +y; the origin moves with the pivot plus w x (origin - pivot).
-  const dem::Vec3 pivot_velocity{Rate(s.linear, t), 0, -Rate(s.approach, t)};
-  k.angular_velocity = {0, -(Rate(s.rotation1, t) + Rate(s.rotation2, t)), 0};
+  k.pivot = pivot;
+  k.pitch = pitch_only ? angle : std::nan("");
+  k.pose.orientation = dem::AxisAngle(axis, angle) * base;
+  k.pose.position = k.pivot - dem::Rotate(k.pose.orientation, point);
+  // Twist: the origin moves with the pivot plus w x (origin - pivot).
+  k.angular_velocity = angular_velocity;
   k.velocity = pivot_velocity + dem::Cross(k.angular_velocity, k.pose.position - k.pivot);
   return k;
 }

@@ -248,12 +248,15 @@ TEST(DigSceneTest, ShippedDigScenesLoad) {
   }
   const Scene lut = LoadScene(kSource + "/scenes/paper/lut_snow_b15.yaml");
   const TrajectorySpec& t = lut.dig.trajectory;
-  // Table 4: 30 deg/s through 90 deg, 0.1 m/s over 0.3 m, 30 deg/s through 90 deg.
-  EXPECT_NEAR(t.rotation1.speed, 30 * kPi / 180, 1e-15);
-  EXPECT_NEAR(t.rotation1.amount, 0.5 * kPi, 1e-15);
-  EXPECT_EQ(t.linear.speed, 0.1);
-  EXPECT_EQ(t.linear.amount, 0.3);
-  EXPECT_NEAR(t.rotation2.speed, 30 * kPi / 180, 1e-15);
+  // Table 4: 0.14 m/s over 0.028 m, 30 deg/s through 90 deg, 0.1 m/s over 0.3 m, 30 deg/s
+  // through 90 deg.
+  ASSERT_EQ(t.moves.size(), 4u);
+  EXPECT_EQ(t.moves[0].speed, 0.14);
+  EXPECT_NEAR(t.moves[1].speed, 30 * kPi / 180, 1e-15);
+  EXPECT_NEAR(t.moves[1].amount, 0.5 * kPi, 1e-15);
+  EXPECT_EQ(t.moves[2].speed, 0.1);
+  EXPECT_EQ(t.moves[2].amount, 0.3);
+  EXPECT_NEAR(t.moves[3].speed, 30 * kPi / 180, 1e-15);
   EXPECT_EQ(lut.dig.passes, 5);
   EXPECT_EQ(lut.dig.bite_depth, 0.015);
 }

@@ -107,6 +107,13 @@ void CheckTwist(const Trajectory& traj, const std::vector<double>& times) {
   }
 }
 
+// The preset's move of that name.
+Move& Named(TrajectorySpec& spec, const std::string& name) {
+  for (Move& m : spec.moves)
+    if (m.name == name) return m;
+  throw std::logic_error("no move " + name);
+}
+
 TrajectorySpec WithPivot(TrajectorySpec s) {
   s.pivot_start = {0.12, -0.03, 0.25};
   s.pivot_offset = {0.01, 0.002, 0.05};
@@ -171,8 +178,8 @@ TEST(TrajectoryTest, TwistMatchesFiniteDifferenceInsideSegments) {
 // A gap between segments: the pose holds, the twist is zero.
 TEST(TrajectoryTest, PoseHoldsBetweenSegments) {
   TrajectorySpec spec = WithPivot(Table1Preset());
-  spec.linear.start = 3.5;
-  spec.rotation2.start = 4.5;
+  Named(spec, "linear").start = 3.5;
+  Named(spec, "rotation2").start = 4.5;
   const Trajectory traj(spec);
   const ScoopKinematics a = traj.At(3.0), b = traj.At(3.25), c = traj.At(3.5);
   for (const ScoopKinematics& k : {b, c}) {
@@ -190,7 +197,7 @@ TEST(TrajectoryTest, LinearOnlyIsAConstantSpeedPush) {
   TrajectorySpec spec;
   spec.pivot_start = {0.05, 0, 0.02};
   spec.initial_pitch = 0;
-  spec.linear = {true, 0.5, 0.01, 0.3};
+  spec.moves = {Translate("linear", {1, 0, 0}, 0.01, 0.3, 0.5)};
   const Trajectory traj(spec);
   EXPECT_NEAR(traj.end_time(), 30.5, 1e-9);
   for (double t : {0.6, 5.0, 17.25, 30.4}) {
@@ -214,31 +221,90 @@ TEST(TrajectoryTest, InvalidSpecsThrow) {
     return "";
   };
   TrajectorySpec s = Table1Preset();
-  s.rotation1.speed = 0;
-  EXPECT_EQ(message(s).rfind("rotation1.speed: ", 0), 0u) << message(s);
+  Named(s, "rotation1").speed = 0;
+  EXPECT_EQ(message(s).rfind("rotation1.rate: ", 0), 0u) << message(s);
+  Named(s, "rotation1").speed = -1;
+  EXPECT_EQ(message(s).rfind("rotation1.rate: ", 0), 0u) << message(s);
   s = Table1Preset();
-  s.linear.amount = -0.1;
-  EXPECT_EQ(message(s).rfind("linear.amount: ", 0), 0u) << message(s);
+  Named(s, "linear").amount = -0.1;
+  EXPECT_EQ(message(s).rfind("linear.distance: ", 0), 0u) << message(s);
   s = Table1Preset();
-  s.linear.start = 2.5;  // overlaps rotation1 [2, 3)
+  Named(s, "linear").start = 2.5;  // overlaps rotation1 [2, 3)
   EXPECT_EQ(message(s).rfind("linear.start: ", 0), 0u) << message(s);
   s = Table1Preset();
-  s.rotation1.start = 1.0;  // before the approach ends: out of order
+  Named(s, "rotation1").start = 1.0;  // before the approach ends: out of order
   EXPECT_EQ(message(s).rfind("rotation1.start: ", 0), 0u) << message(s);
   s = Table1Preset();
-  s.approach.start = -1;
+  Named(s, "approach").start = -1;
   EXPECT_EQ(message(s).rfind("approach.start: ", 0), 0u) << message(s);
+  s = Table1Preset();
+  Named(s, "rotation2").axis = {0, 0, 0};
+  EXPECT_EQ(message(s).rfind("rotation2.axis: ", 0), 0u) << message(s);
+  s = Table1Preset();
+  s.moves.push_back(Hold("pause", -0.5));
+  EXPECT_EQ(message(s).rfind("pause.duration: ", 0), 0u) << message(s);
   s = Table1Preset();
   s.initial_pitch = NAN;
   EXPECT_EQ(message(s).rfind("initial_pitch: ", 0), 0u) << message(s);
   s = Table1Preset();
   s.pivot_start.z = INFINITY;
   EXPECT_EQ(message(s).rfind("pivot_start: ", 0), 0u) << message(s);
-  // A disabled segment is not read.
-  s = Table1Preset();
-  s.linear.enabled = false;
-  s.linear.speed = -5;
-  EXPECT_EQ(message(s), "");
+}
+
+// A path the study's four segments cannot express: Table 1, then a vertical lift of 0.05 m at
+// 0.1 m/s after the tilt, a 0.25 s hold, and a sideways sweep of 0.04 m at 0.2 m/s along +y.
+// Written out independently: once rotation2 has ended (5.0 s) the orientation is the blade-up
+// one, R = R_y(-pi/2) R0, and the pivot moves by +z 0.1 (t - 5) until 5.5 s, holds until
+// 5.75 s, then by +y 0.2 (t - 5.75) until 5.95 s.
+TEST(TrajectoryTest, LiftAndSweepAfterTheTiltMatchClosedForm) {
+  TrajectorySpec spec = WithPivot(Table1Preset());
+  spec.moves.push_back(Translate("lift", {0, 0, 1}, 0.1, 0.05));
+  spec.moves.push_back(Hold("pause", 0.25));
+  spec.moves.push_back(Translate("sweep", {0, 1, 0}, 0.2, 0.04));
+  const Trajectory traj(spec);
+  EXPECT_NEAR(traj.end_time(), 5.95, kTol);
+  const dem::Vec3 p0 = spec.pivot_start, off = spec.pivot_offset;
+  const dem::Vec3 after_tilt = p0 + dem::Vec3{0.3, 0, -0.028};
+  const Axes a = AxesAt(-kPi / 2);
+  for (double t : {5.0, 5.1, 5.25, 5.4999, 5.5, 5.6, 5.75, 5.8, 5.9, 5.95, 7.0}) {
+    const std::string at = "t = " + std::to_string(t);
+    dem::Vec3 pivot = after_tilt + dem::Vec3{0, 0, 0.1 * (std::min(t, 5.5) - 5.0)};
+    if (t > 5.75) pivot.y += 0.2 * (std::min(t, 5.95) - 5.75);
+    const ScoopKinematics k = traj.At(t);
+    ExpectVecNear(k.pivot, pivot, kTol, at + " pivot");
+    ExpectVecNear(dem::Rotate(k.pose.orientation, {1, 0, 0}), a.x, kTol, at + " blade");
+    ExpectVecNear(dem::Rotate(k.pose.orientation, {0, 0, 1}), a.z, kTol, at + " l_scoop z");
+    const dem::Vec3 origin = pivot - (off.x * a.x + off.y * a.y + off.z * a.z);
+    ExpectVecNear(k.pose.position, origin, kTol, at + " origin");
+    const dem::Vec3 v = t < 5.5 ? dem::Vec3{0, 0, 0.1}
+                        : (t >= 5.75 && t < 5.95) ? dem::Vec3{0, 0.2, 0}
+                                                  : dem::Vec3{0, 0, 0};
+    ExpectVecNear(k.velocity, v, kTol, at + " velocity");
+  }
+  CheckTwist(traj, {5.2, 5.4, 5.8, 5.9});
+}
+
+// A rotation about a world axis that is not the pitch axis, through a point of the scoop other
+// than the pivot: the point stays put and every other point turns about it, R = AxisAngle(z,
+// rate (t - start)) R_before (Rodrigues, written out for a quarter turn).
+TEST(TrajectoryTest, YawAboutAnotherPointKeepsThatPointFixed) {
+  TrajectorySpec spec;
+  spec.pivot_start = {0.1, 0.2, 0.3};
+  spec.initial_pitch = 0;  // level: R0
+  const dem::Vec3 tip{0.12, 0.0, 0.02};  // a point of l_scoop
+  spec.moves = {RotateAbout("yaw", {0, 0, 2}, kPi / 2, kPi / 2, tip, 1.0)};  // axis normalised
+  const Trajectory traj(spec);
+  const dem::Vec3 tip_world{0.1 + 0.12, 0.2 - 0.0, 0.3 - 0.02};  // R0 = diag(1, -1, -1)
+  for (double t : {0.5, 1.0, 1.25, 1.5, 2.0, 3.0}) {
+    const std::string at = "t = " + std::to_string(t);
+    const ScoopKinematics k = traj.At(t);
+    ExpectVecNear(dem::Apply(k.pose, tip), tip_world, kTol, at + " tip");
+    const double phi = kPi / 2 * (std::clamp(t, 1.0, 2.0) - 1.0);
+    // l_scoop x (world +x when level) turned by phi about +z.
+    ExpectVecNear(dem::Rotate(k.pose.orientation, {1, 0, 0}), {std::cos(phi), std::sin(phi), 0},
+                  kTol, at + " blade");
+  }
+  CheckTwist(traj, {1.1, 1.5, 1.9});
 }
 
 }  // namespace
