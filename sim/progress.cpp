@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdarg>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -13,7 +14,11 @@
 namespace sim {
 namespace {
 
-constexpr double kTtyPeriod = 0.25;  // seconds between rewrites of the live line
+constexpr double kTtyPeriod = 0.25;      // seconds between rewrites of the live line
+constexpr double kFirstLine = 1.0;       // seconds before the first plain (not a terminal) line
+constexpr double kSamplePeriod = 0.1;    // seconds between the samples of the recent rate
+constexpr double kMinWindow = 2.0;       // the recent past is at least this long [s]
+constexpr double kWindowFraction = 0.25; // and at least this share of the elapsed time
 
 double Seconds(std::chrono::steady_clock::duration d) {
   return std::chrono::duration<double>(d).count();
@@ -33,12 +38,8 @@ std::string Clock(double seconds) {
 }
 
 // "label  42.0%  t 0.021/0.05 s  elapsed 0:12  ETA 0:17  3.21 M particle-steps/s"
-std::string Line(const std::string& label, double total_time, double sim_time,
-                 int64_t particle_steps, double elapsed, bool done) {
-  const double fraction =
-      total_time > 0 ? std::min(1.0, std::max(0.0, sim_time / total_time)) : (done ? 1.0 : 0.0);
-  const double eta =
-      done ? 0.0 : (fraction > 0 ? elapsed * (1.0 - fraction) / fraction : std::nan(""));
+std::string Line(const std::string& label, double fraction, double total_time, double sim_time,
+                 int64_t particle_steps, double elapsed, double eta) {
   const double rate = elapsed > 0 ? static_cast<double>(particle_steps) / elapsed / 1e6 : 0.0;
   char buffer[256];
   std::snprintf(buffer, sizeof buffer,
@@ -48,7 +49,21 @@ std::string Line(const std::string& label, double total_time, double sim_time,
   return buffer;
 }
 
+bool g_live_line = false;  // a live progress line is on the terminal, not ended by a newline
+
 }  // namespace
+
+void Status(const char* format, ...) {
+  if (g_live_line) {
+    std::fputs("\r\x1b[K", stderr);  // clear it; the next update redraws it
+    g_live_line = false;
+  }
+  va_list args;
+  va_start(args, format);
+  std::vfprintf(stderr, format, args);
+  va_end(args);
+  std::fflush(stderr);
+}
 
 Progress::Progress(std::string label, double total_time, bool quiet, double log_period)
     : label_(std::move(label)),
@@ -56,31 +71,52 @@ Progress::Progress(std::string label, double total_time, bool quiet, double log_
       quiet_(quiet),
       tty_(isatty(STDERR_FILENO) == 1),
       log_period_(log_period),
+      eta_(std::nan("")),
       start_(std::chrono::steady_clock::now()),
       last_print_(start_) {}
 
 void Progress::Update(double sim_time, int64_t particle_steps) {
   if (quiet_) return;
   const auto now = std::chrono::steady_clock::now();
-  if (Seconds(now - last_print_) < (tty_ ? kTtyPeriod : log_period_)) return;
+  const double elapsed = Seconds(now - start_);
+  if (samples_.empty() || elapsed - samples_.back().elapsed >= kSamplePeriod)
+    samples_.push_back({elapsed, sim_time});
+  // The first plain line comes after about a second, so that a log shows the run has started.
+  const double period = tty_ ? kTtyPeriod : (printed_ ? log_period_ : kFirstLine);
+  if (Seconds(now - last_print_) < period) return;
   last_print_ = now;
+  printed_ = true;
+  // ETA: the simulated time left at the rate of the recent past.
+  const double left = std::max(0.0, total_time_ - sim_time);
+  const double window = std::max(kMinWindow, kWindowFraction * elapsed);
+  auto first = std::upper_bound(samples_.begin(), samples_.end(), elapsed - window,
+                                [](double e, const Sample& s) { return e < s.elapsed; });
+  if (first != samples_.begin()) --first;
+  const double d_sim = sim_time - first->sim_time, d_wall = elapsed - first->elapsed;
+  eta_ = d_sim > 0 && d_wall > 0 ? left * d_wall / d_sim : std::nan("");
+  const double fraction =
+      total_time_ > 0 ? std::min(1.0, std::max(0.0, sim_time / total_time_)) : 0.0;
   const std::string line =
-      Line(label_, total_time_, sim_time, particle_steps, Seconds(now - start_), false);
+      Line(label_, fraction, total_time_, sim_time, particle_steps, elapsed, eta_);
   if (tty_) {
     std::fprintf(stderr, "\r%s\x1b[K", line.c_str());  // ESC[K clears the rest of the old line
+    g_live_line = true;
   } else {
     std::fprintf(stderr, "%s\n", line.c_str());
   }
   std::fflush(stderr);
 }
 
-void Progress::Finish(double sim_time, int64_t particle_steps) {
+void Progress::Finish(double sim_time, int64_t particle_steps, bool done) {
   if (quiet_) return;
   const auto now = std::chrono::steady_clock::now();
   last_print_ = now;
-  const std::string line =
-      Line(label_, total_time_, sim_time, particle_steps, Seconds(now - start_), true);
+  const double fraction =
+      done ? 1.0 : total_time_ > 0 ? std::min(1.0, std::max(0.0, sim_time / total_time_)) : 0.0;
+  const std::string line = Line(label_, fraction, total_time_, sim_time, particle_steps,
+                                Seconds(now - start_), done ? 0.0 : std::nan(""));
   std::fprintf(stderr, tty_ ? "\r%s\x1b[K\n" : "%s\n", line.c_str());
+  g_live_line = false;
   std::fflush(stderr);
 }
 

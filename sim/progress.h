@@ -1,10 +1,15 @@
 // Progress of a long run on stderr: a live line (percent, simulated time, ETA, particle-steps/s)
-// when stderr is a terminal, a plain log line every `log_period` seconds otherwise.
+// when stderr is a terminal, a plain log line otherwise (the first after about a second, then
+// every `log_period` seconds). Status lines go through Status(), which never glues onto a live
+// line. The ETA divides the simulated time left by the simulated rate over the recent past
+// (the last quarter of the elapsed time, at least 2 s): a dig's cost per simulated second
+// changes as the scoop enters the bed, so the run's average rate would mislead.
 #pragma once
 
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "dem/system.h"
 
@@ -16,17 +21,30 @@ class Progress {
   Progress(std::string label, double total_time, bool quiet = false, double log_period = 10.0);
   // Call every step or every few steps: sim_time [s], particle_steps done so far.
   void Update(double sim_time, int64_t particle_steps);
-  // Final line (newline on a terminal).
-  void Finish(double sim_time, int64_t particle_steps);
+  // Final line (newline on a terminal); `done`: the run reached its end (shown as 100%).
+  void Finish(double sim_time, int64_t particle_steps, bool done = true);
+
+  // Estimated wall seconds left at the last Update (NaN when unknown), for tests and logs.
+  double eta() const { return eta_; }
 
  private:
+  struct Sample {
+    double elapsed, sim_time;
+  };
   std::string label_;
   double total_time_;
   bool quiet_;
   bool tty_;
   double log_period_;
+  bool printed_ = false;
+  double eta_;
+  std::vector<Sample> samples_;  // (elapsed, sim_time) about every 0.1 s, for the recent rate
   std::chrono::steady_clock::time_point start_, last_print_;
 };
+
+// printf to stderr for status lines: clears a live progress line first, so a message never
+// glues onto it (the line is redrawn at its next update).
+void Status(const char* format, ...) __attribute__((format(printf, 1, 2)));
 
 // The phase times spent between two readings of System::phase_times().
 dem::PhaseTimes PhasesSince(const dem::PhaseTimes& now, const dem::PhaseTimes& before);

@@ -6,8 +6,8 @@
 //   scoopsim render OUT.h5 --frames DIR [--video] [--color-by F] [--camera PRESET]
 //   scoopsim bench render --particles N --frames F [--threads T]
 //   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
-// Exit status: 0 success, 1 runtime failure, 2 bad input (scene, materials file or command line);
-// the commands' own statuses pass through (sim/runner.cpp: 3 unstable, 4 not settled, 130 stopped).
+// Exit status: sim/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
+// not settled, 130 stopped by a signal).
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -23,13 +23,14 @@
 #include "render/camera.h"
 #include "render/frames.h"
 #include "render/saved_run.h"
-#include "sim/runner.h"
+#include "sim/commands.h"
+#include "sim/exit_status.h"
 #include "sim/scene.h"
 
 namespace {
 
-constexpr int kExitInput = 2;
-constexpr int kExitFailure = 1;
+using sim::kExitFailure;
+using sim::kExitInput;
 constexpr int kMaxThreads = 4096;  // same bound as the scene's `threads`
 
 // Messages are printed on one line, whatever they contain.

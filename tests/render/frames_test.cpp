@@ -17,7 +17,7 @@
 #include "render/saved_run.h"
 #include "sim/bed.h"
 #include "sim/h5_output.h"
-#include "sim/runner.h"
+#include "sim/commands.h"
 #include "sim/scene.h"
 #include "tests/cli_util.h"
 

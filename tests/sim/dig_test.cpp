@@ -10,7 +10,7 @@
 #include <string>
 
 #include "dem/system.h"
-#include "sim/runner.h"
+#include "sim/commands.h"
 #include "sim/scene.h"
 
 namespace sim {

@@ -1,5 +1,6 @@
-// The commands behind the CLI: make a bed, run a scene, benchmark. Each returns a process exit
-// status; bad input throws sim::InputError (the CLI prints it and exits 2).
+// The commands behind the CLI: make a bed, run a scene, the shape study, benchmarks. Each is a
+// few lines around sim::World (sim/world.h), the one run loop, and returns a process exit status
+// (sim/exit_status.h); bad input throws sim::InputError (the CLI prints it and exits 2).
 #pragma once
 
 #include <cstdint>
@@ -7,22 +8,10 @@
 #include <vector>
 
 #include "sim/scene.h"
+#include "sim/world.h"
 #include "sim/world_view.h"
 
 namespace sim {
-
-// What a dig run measured, for callers that want numbers rather than the HDF5 file (tests,
-// studies). Magnitudes of the wrench in the world frame about the scoop CoM, over all rows.
-struct DigSummary {
-  double peak_force = 0;               // max |F| [N]
-  double mean_force = 0;               // mean |F| over the rows after first contact [N]
-  double peak_torque = 0;              // max |T| [N m]
-  double peak_overlap = 0;             // deepest overlap / smaller diameter over all steps [-]
-  std::vector<double> collected_mass;  // per pass [kg]
-  int64_t particles = 0;               // at the start of the dig
-  int64_t steps = 0;
-  double simulated = 0;  // [s]
-};
 
 struct RunOptions {
   int threads = 0;     // 0 = all cores

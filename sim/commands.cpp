@@ -1,4 +1,4 @@
-#include "sim/runner.h"
+#include "sim/commands.h"
 
 #include <sys/resource.h>
 
@@ -11,72 +11,28 @@
 
 #include "sim/bed.h"
 #include "sim/bed_io.h"
-#include "sim/dig_run.h"
+#include "sim/exit_status.h"
 #include "sim/h5_output.h"
 #include "sim/progress.h"
+#include "sim/world.h"
 
 namespace sim {
 namespace {
 
-// Exit statuses beyond 0 (done) and 2 (bad input, from the CLI).
-constexpr int kExitUnstable = 3;    // the simulation went unstable; the diagnostic says why
-constexpr int kExitStopped = 130;   // SIGINT/SIGTERM: outputs closed cleanly
-constexpr int kExitNotSettled = 4;  // the bed did not settle within settle.max_time
-
-std::unique_ptr<dem::System> MakeSystem(const Scene& scene, int threads) {
-  auto system = std::make_unique<dem::System>(scene.materials, MakeSystemConfig(scene));
-  if (threads > 0) system->set_num_threads(threads);
-  return system;
+// The scene's dig, driven along its tool path.
+std::unique_ptr<ScoopDriver> KinematicDig(const Scene& scene) {
+  const DigSpec& dig = scene.dig;
+  return std::make_unique<KinematicDriver>(dig.trajectory, dig.heading, dig.bite_depth,
+                                           dig.start_buried);
 }
 
-void ReportUnstable(const dem::StepStatus& status) {
-  std::fprintf(stderr, "scoopsim: simulation unstable: %s\n", status.message.c_str());
-}
-
-// Fills and settles the scene's bed into `system`, with progress on stderr.
-SettleReport Pour(const Scene& scene, dem::System* system, bool quiet) {
-  Progress progress("bed", scene.bed.settle_max_time, quiet);
-  const double t0 = system->time();
-  const SettleReport r = FillAndSettle(scene, system, [&](const dem::System& s) {
-    progress.Update(s.time() - t0, s.step_count() * static_cast<int64_t>(s.particles().size()));
-    return !StopRequested();
-  });
-  progress.Finish(system->time() - t0,
-                  system->step_count() * static_cast<int64_t>(system->particles().size()));
-  return r;
-}
-
-int CheckSettled(const Scene& scene, const SettleReport& r, const dem::System& system) {
-  if (!r.status.ok()) {
-    ReportUnstable(r.status);
-    return kExitUnstable;
-  }
-  if (StopRequested()) return kExitStopped;
-  if (system.num_bodies() < scene.bed.count) {
-    std::fprintf(stderr,
-                 "scoopsim: %s: the box holds only %lld of bed.count = %lld particles; raise "
-                 "box.max or lower bed.count\n",
-                 scene.path.c_str(), static_cast<long long>(system.num_bodies()),
-                 static_cast<long long>(scene.bed.count));
-    return kExitNotSettled;
-  }
-  if (!r.settled) {
-    std::fprintf(stderr,
-                 "scoopsim: bed not settled after %.3g s (mean kinetic energy %.3g J > %.3g J); "
-                 "raise bed.settle.max_time or bed.settle.kinetic_energy\n",
-                 r.sim_time, r.mean_ke, scene.bed.settle_ke);
-    return kExitNotSettled;
-  }
-  return 0;
-}
-
-// Pours the bed, says what went wrong if anything did, and on success (or a bed that merely did
-// not settle in time) canonicalizes the storage, ready to save or run. Returns the exit status.
-int PourBed(const Scene& scene, dem::System* system, bool quiet, SettleReport* report) {
-  *report = Pour(scene, system, quiet);
-  const int status = CheckSettled(scene, *report, *system);
-  if (status == 0 || status == kExitNotSettled) system->Canonicalize();
-  return status;
+RunControl Control(const RunOptions& options) {
+  RunControl control;
+  control.quiet = options.quiet;
+  control.stop_after = options.stop_after;
+  control.on_frame = options.on_frame;
+  control.frame_every = options.frame_every;
+  return control;
 }
 
 // CPU time of the process so far, all threads [s].
@@ -97,126 +53,36 @@ double PeakRssMb() {
 
 int MakeBed(const Scene& scene, const RunOptions& options) {
   InstallStopHandlers();
-  auto system = MakeSystem(scene, options.threads);
+  World world(scene, options.threads);
   const auto wall0 = std::chrono::steady_clock::now();
   SettleReport r;
-  const int status = PourBed(scene, system.get(), options.quiet, &r);
-  if (status != 0 && status != kExitNotSettled) return status;
-  SaveBed(options.output, *system, scene.yaml_text);
+  const int status = world.Pour(options.quiet, &r);
+  if (status != kExitOk && status != kExitNotSettled) return status;
+  SaveBed(options.output, world.system(), scene.yaml_text);
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  std::fprintf(stderr,
-               "scoopsim: bed of %lld particles (%zu spheres), %d layer(s), %.3f s simulated in "
-               "%.1f s; saved %s\n",
-               static_cast<long long>(system->num_bodies()), system->particles().size(), r.layers,
-               r.sim_time, wall, options.output.c_str());
+  Status("scoopsim: bed of %lld particles (%zu spheres), %d layer(s), %.3f s simulated in %.1f s; "
+         "saved %s\n",
+         static_cast<long long>(world.system().num_bodies()), world.system().particles().size(),
+         r.layers, r.sim_time, wall, options.output.c_str());
   return status;
 }
 
 int RunScene(const Scene& scene, const RunOptions& options) {
   InstallStopHandlers();
-  auto system = MakeSystem(scene, options.threads);
+  World world(scene, options.threads);
   if (!scene.bed.file.empty()) {
-    LoadBed(scene.bed.file, system.get());  // already resolved against the scene's folder
-    system->Canonicalize();
+    world.LoadBed(scene.bed.file);  // already resolved against the scene's folder
   } else {
     SettleReport r;
-    const int status = PourBed(scene, system.get(), options.quiet, &r);
-    if (status != 0) return status;
+    const int status = world.Pour(options.quiet, &r);
+    if (status != kExitOk) return status;
   }
-
-  H5Output out(options.output, scene.yaml_text, SCOOPSIM_VERSION, scene.output.flush_seconds);
-  if (scene.dig.enabled) {
-    const int status = RunDig(scene, options, system.get(), &out);
-    out.SetStateHash(system->StateHash());
-    out.SetAttribute("time", system->time());
-    out.Close();
-    std::fprintf(stderr, "scoopsim: wrote %s\n", out.path().c_str());
-    return status;
-  }
-  system->set_sleep(scene.sleep);  // the scene's `sleep` (a dig sets it in RunDig)
-  const int num_planes = static_cast<int>(system->config().planes.size());
-  auto record = [&] {
-    const double t = system->time();
-    out.AppendRow("/series/time", &t, 1);
-    const double ke = system->KineticEnergy();
-    out.AppendRow("/series/kinetic_energy", &ke, 1);
-    const double contacts = static_cast<double>(system->neighbor_stats().contacts);
-    out.AppendRow("/series/contacts", &contacts, 1);
-    std::vector<double> forces;
-    for (int k = 0; k < num_planes; ++k) {
-      const dem::Vec3 f = system->plane_force(k);
-      forces.insert(forces.end(), {f.x, f.y, f.z});
-    }
-    out.AppendRow("/series/wall_force", forces.data(), 3 * num_planes);
-  };
-
-  const double t_end = system->time() + scene.duration;
-  Progress progress("run", scene.duration, options.quiet);
-  const double t_start = system->time();
-  double next_record = system->time();
-  int exit_status = 0;
-  if (scene.output.snapshot_every > 0) out.WriteSnapshot(system->time(), system->particles());
-
-  // Frames (render/, `--frames`): options.on_frame at t0 and then every frame_every seconds
-  // (0 = output.interval). Called here on the main thread between steps, so no OpenMP region is
-  // active while it renders. Fill in pass/rho/force/meshes once the run has a scoop.
-  const double frame_every = options.frame_every > 0 ? options.frame_every : scene.output.interval;
-  double next_frame = system->time();
-  auto maybe_frame = [&] {
-    if (!options.on_frame || system->time() < next_frame - 1e-3 * scene.time_step) return;
-    WorldView view;
-    view.time = system->time();
-    view.particles = &system->particles();
-    view.box_min = scene.box_min;
-    view.box_max = scene.box_max;
-    view.gravity = scene.gravity;
-    options.on_frame(view);
-    while (next_frame <= system->time() + 1e-3 * scene.time_step) next_frame += frame_every;
-  };
-  maybe_frame();
-
-  const int64_t step0 = system->step_count();
-  int64_t particle_steps = 0;  // of the awake particles (all of them without sleeping)
-  while (system->time() < t_end - 0.5 * scene.time_step) {
-    const dem::StepStatus status = system->Step();
-    if (!status.ok()) {
-      ReportUnstable(status);
-      exit_status = kExitUnstable;
-      break;
-    }
-    particle_steps += system->neighbor_stats().awake;
-    const int64_t steps = system->step_count() - step0;
-    if (system->time() >= next_record) {
-      record();
-      next_record += scene.output.interval;
-    }
-    if (scene.output.snapshot_every > 0 && steps % scene.output.snapshot_every == 0)
-      out.WriteSnapshot(system->time(), system->particles());
-    maybe_frame();
-    if (steps % 64 == 0) {
-      out.MaybeFlush();
-      progress.Update(system->time() - t_start, particle_steps);
-      if (StopRequested()) {
-        std::fprintf(stderr, "scoopsim: stopped by signal %d at t = %.6g s; output closed\n",
-                     StopSignal(), system->time());
-        exit_status = kExitStopped;
-        break;
-      }
-    }
-    if (options.stop_after > 0 && system->time() - t_start >= options.stop_after) {
-      std::fprintf(stderr, "scoopsim: stopped at t = %.6g s (--stop-after); output closed\n",
-                   system->time());
-      break;
-    }
-  }
-  progress.Finish(system->time() - t_start, particle_steps);
-  out.SetStateHash(system->StateHash());
-  out.SetAttribute("time", system->time());
-  out.Close();
-  std::fprintf(stderr, "scoopsim: wrote %s (ParaView: %s)\n", out.path().c_str(),
-               out.xdmf_path().c_str());
-  return exit_status;
+  world.OpenOutput(options.output);
+  if (scene.dig.enabled) world.StartDig(KinematicDig(scene));
+  const RunResult result = world.Run(Control(options));
+  if (options.dig_summary) *options.dig_summary = world.dig_summary();
+  return result.exit_status;
 }
 
 int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
@@ -256,7 +122,7 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
   for (const dem::ClumpTemplate& t : templates) {
     Scene s = WithClumpBed(scene, t);
     s.output.snapshot_every = 0;  // the study file holds the wrench, not the particles
-    auto system = MakeSystem(s, options.threads);
+    World world(s, options.threads);
     std::fprintf(stderr,
                  "scoopsim: study shape: %s, %zu sphere(s) a clump, %lld clumps, dt %.3g s\n",
                  t.name.c_str(), t.radii.size(), static_cast<long long>(s.bed.count), s.time_step);
@@ -273,28 +139,28 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
                    bed_path.c_str());
     }
     if (cached) {
-      LoadBed(bed_path, system.get());
-      system->Canonicalize();
+      world.LoadBed(bed_path);
     } else {
       SettleReport r;
-      status = PourBed(s, system.get(), options.quiet, &r);
-      if (status != 0) break;
-      if (!bed_path.empty()) SaveBed(bed_path, *system, s.yaml_text);
+      status = world.Pour(options.quiet, &r);
+      if (status != kExitOk) break;
+      if (!bed_path.empty()) SaveBed(bed_path, world.system(), s.yaml_text);
     }
+    const dem::System* system = &world.system();
     const double bed_wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - bed0).count();
     // The dig, into the template's group.
     const double clumps = static_cast<double>(system->clumps().size());
     const double spheres = static_cast<double>(system->particles().size());
     out.SetGroup("/" + t.name);
-    DigSummary summary;
-    RunOptions ro;
-    ro.threads = options.threads;
-    ro.quiet = options.quiet;
-    ro.dig_summary = &summary;
     const auto dig0 = std::chrono::steady_clock::now();
     const double cpu0 = CpuSeconds();
-    status = RunDig(s, ro, system.get(), &out);
+    world.UseOutput(&out);
+    world.StartDig(KinematicDig(s));
+    RunControl control;
+    control.quiet = options.quiet;
+    status = world.Run(control).exit_status;
+    const DigSummary& summary = world.dig_summary();
     const double dig_cpu = CpuSeconds() - cpu0;
     const double dig_wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - dig0).count();
@@ -369,24 +235,25 @@ int BenchSettle(const BenchSettleOptions& options) {
 
   const std::string dir = options.cache_dir.empty() ? source + "/bench/cache" : options.cache_dir;
   const std::string bed_path = dir + "/settle_" + std::to_string(options.particles) + ".h5";
-  auto system = MakeSystem(scene, options.threads);
+  World world(scene, options.threads);
   if (fs::exists(bed_path)) {
-    LoadBed(bed_path, system.get());
-    system->Canonicalize();
+    world.LoadBed(bed_path);
   } else {
     std::fprintf(stderr, "scoopsim bench: preparing %s (once)\n", bed_path.c_str());
     InstallStopHandlers();
     SettleReport r;
-    const int status = PourBed(scene, system.get(), false, &r);
-    if (status != 0 && status != kExitNotSettled) return status;
-    SaveBed(bed_path, *system, scene.yaml_text);
+    const int status = world.Pour(false, &r);
+    if (status != kExitOk && status != kExitNotSettled) return status;
+    SaveBed(bed_path, world.system(), scene.yaml_text);
   }
+  // The DEM step alone, as the settle benchmarks of other codes time theirs (no output rows).
+  dem::System* system = &world.mutable_system();
   const int64_t n = static_cast<int64_t>(system->particles().size());
   const auto t0 = std::chrono::steady_clock::now();
   for (int64_t k = 0; k < options.steps; ++k) {
     const dem::StepStatus status = system->Step();
     if (!status.ok()) {
-      ReportUnstable(status);
+      Status("scoopsim: simulation unstable: %s\n", status.message.c_str());
       return kExitUnstable;
     }
   }
@@ -407,15 +274,14 @@ int BenchSettle(const BenchSettleOptions& options) {
 int BenchStep(const BenchStepOptions& options) {
   const Scene scene = LoadScene(options.scene);
   if (scene.bed.file.empty()) throw InputError(options.scene + ": bed.file: expected a saved bed");
-  auto system = MakeSystem(scene, options.threads);
-  LoadBed(scene.bed.file, system.get());
-  system->set_sleep(scene.sleep);
-  system->Canonicalize();
+  World world(scene, options.threads);
+  world.LoadBed(scene.bed.file);
+  const dem::System* system = &world.system();
   auto run = [&](int64_t steps, int64_t* awake_sum) {
     for (int64_t k = 0; k < steps; ++k) {
-      const dem::StepStatus status = system->Step();
+      const dem::StepStatus status = world.Step();
       if (!status.ok()) {
-        ReportUnstable(status);
+        Status("scoopsim: simulation unstable: %s\n", status.message.c_str());
         return false;
       }
       *awake_sum += system->neighbor_stats().awake;

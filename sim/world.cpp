@@ -1,0 +1,413 @@
+#include "sim/world.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "sim/bed_io.h"
+#include "sim/exit_status.h"
+#include "sim/mesh_io.h"
+#include "sim/progress.h"
+
+namespace sim {
+
+// The dig's state: the scoop, its driver and the current pass.
+struct World::Dig {
+  std::unique_ptr<ScoopDriver> driver;
+  int mesh = -1;         // index in the DEM system
+  dem::Vec3 com_scoop;   // scoop centre of mass in l_scoop [m]
+  BodyFrame body;        // the study's body frame
+  dem::Vec3 trench;      // unit digging direction, world
+  BedContext bed;        // surface, clearance, mesh, step
+  int pass = 0;          // 1-based; passes + 1 once done
+  double pass_t0 = 0;    // time the current pass began [s]
+  double next_row = 0;   // time of the next /scoop/ row [s]
+  bool touched = false;  // the scoop has touched a particle in this pass
+  dem::Vec3 com_contact; // CoM at first touch [m]
+  double rho = 0;        // CoM travel along the trench since first touch [m]
+  ScoopWrench wrench;    // of the last step
+  double force_sum = 0;  // |F| over the rows after first contact, for the mean [N]
+  int64_t force_rows = 0;
+  double planned = 0;    // all passes [s]
+};
+
+namespace {
+
+double Seconds(std::chrono::steady_clock::duration d) {
+  return std::chrono::duration<double>(d).count();
+}
+
+void Row3(H5Output* out, const char* name, const dem::Vec3& v) {
+  const double a[3] = {v.x, v.y, v.z};
+  out->AppendRow(name, a, 3);
+}
+
+}  // namespace
+
+World::World(const Scene& scene, int threads)
+    : scene_(scene),
+      system_(std::make_unique<dem::System>(scene.materials, MakeSystemConfig(scene))) {
+  if (threads > 0) system_->set_num_threads(threads);
+}
+
+World::~World() = default;
+
+void World::LoadBed(const std::string& path) {
+  sim::LoadBed(path, system_.get());
+  system_->Canonicalize();
+}
+
+int World::Pour(bool quiet, SettleReport* report) {
+  Progress progress("bed", scene_.bed.settle_max_time, quiet);
+  const double t0 = system_->time();
+  auto particle_steps = [&] {
+    return system_->step_count() * static_cast<int64_t>(system_->particles().size());
+  };
+  SettleReport& r = *report;
+  r = FillAndSettle(scene_, system_.get(), [&](const dem::System& s) {
+    progress.Update(s.time() - t0, particle_steps());
+    return !StopRequested();
+  });
+  progress.Finish(system_->time() - t0, particle_steps());
+  int status = kExitOk;
+  if (!r.status.ok()) {
+    Status("scoopsim: simulation unstable: %s\n", r.status.message.c_str());
+    return kExitUnstable;
+  }
+  if (StopRequested()) return kExitStopped;
+  if (system_->num_bodies() < scene_.bed.count) {
+    Status("scoopsim: %s: the box holds only %lld of bed.count = %lld particles; raise box.max or "
+           "lower bed.count\n",
+           scene_.path.c_str(), static_cast<long long>(system_->num_bodies()),
+           static_cast<long long>(scene_.bed.count));
+    status = kExitNotSettled;
+  } else if (!r.settled) {
+    Status("scoopsim: bed not settled after %.3g s (mean kinetic energy %.3g J > %.3g J); raise "
+           "bed.settle.max_time or bed.settle.kinetic_energy\n",
+           r.sim_time, r.mean_ke, scene_.bed.settle_ke);
+    status = kExitNotSettled;
+  }
+  // Storage and lists a function of positions and ids alone, ready to save or run.
+  system_->Canonicalize();
+  return status;
+}
+
+void World::OpenOutput(const std::string& path) {
+  owned_out_ = std::make_unique<H5Output>(path, scene_.yaml_text, SCOOPSIM_VERSION,
+                                          scene_.output.flush_seconds);
+  out_ = owned_out_.get();
+}
+
+void World::UseOutput(H5Output* out) {
+  owned_out_.reset();
+  out_ = out;
+}
+
+void World::StartDig(std::unique_ptr<ScoopDriver> driver) {
+  const DigSpec& spec = scene_.dig;
+  dig_ = std::make_unique<Dig>();
+  Dig& dig = *dig_;
+  dig.driver = std::move(driver);
+  dem::TriangleMesh mesh = LoadMesh(spec.scoop.mesh, spec.scoop.scale);
+  mesh.name = "scoop";
+  mesh.material = spec.scoop.material_index;
+  dig.mesh = system_->AddMesh(mesh);
+  // Mass properties: from the scene, or from the mesh at the scene's density.
+  double scoop_mass = spec.scoop.mass;
+  dig.com_scoop = spec.scoop.com;
+  if (spec.scoop.density > 0) {
+    try {
+      const dem::MassProperties mp = dem::ComputeMassProperties(mesh, spec.scoop.density);
+      scoop_mass = mp.mass;
+      dig.com_scoop = mp.center_of_mass;
+    } catch (const std::invalid_argument& e) {
+      throw InputError(spec.scoop.mesh + ": dig.scoop.density needs a closed mesh (" + e.what() +
+                       ")");
+    }
+  }
+  if (out_) {
+    out_->SetAttribute("scoop_mesh", spec.scoop.mesh);
+    out_->SetAttribute("scoop_mass", scoop_mass);
+    out_->SetAttribute("scoop_com_x", dig.com_scoop.x);
+    out_->SetAttribute("scoop_com_y", dig.com_scoop.y);
+    out_->SetAttribute("scoop_com_z", dig.com_scoop.z);
+  }
+
+  // Original surface: given, or the mean column top of the bed's central part (the columns next
+  // to the walls are lower or higher by wall effects).
+  const dem::Particles& p = system_->particles();
+  const double r_max = scene_.bed.radius_max;
+  double surface = spec.surface;
+  double bed_top = surface;
+  if (!spec.surface_given) {
+    const dem::Vec3 margin{4 * r_max, 4 * r_max, 0};
+    surface = BedSurface(p, scene_.box_min + margin, scene_.box_max - margin, 4 * r_max);
+  }
+  for (size_t i = 0; i < p.size(); ++i) bed_top = std::max(bed_top, p.x[i].z + p.radius[i]);
+  if (out_) out_->SetAttribute("surface", surface);
+  dig.bed = {&system_->mesh(dig.mesh), surface, bed_top + 2 * r_max, scene_.time_step};
+  dig.body = StudyBodyFrame(spec.heading, scene_.gravity);
+  dig.trench = {std::cos(spec.heading), std::sin(spec.heading), 0.0};
+  for (int pass = 1; pass <= spec.passes; ++pass)
+    dig.planned += dig.driver->PlannedDuration(pass, dig.bed);
+
+  system_->set_sleep(scene_.sleep);
+  summary_ = DigSummary{};
+  summary_.particles = static_cast<int64_t>(p.size());
+  t_start_ = system_->time();
+  step0_ = system_->step_count();
+  particle_steps_ = 0;
+  started_ = true;
+  dig.pass = 1;
+  BeginPass();
+}
+
+void World::BeginPass() {
+  Dig& dig = *dig_;
+  const PassStart start = dig.driver->BeginPass(dig.pass, dig.bed);
+  if (start.start_buried) {
+    // The tool is placed in the bed at its start pose (as the testbed's scoop was inserted by
+    // hand): the particles it would overlap are taken out first.
+    const std::vector<int64_t> cut = ParticlesTouchingMesh(
+        system_->particles(), system_->mesh(dig.mesh), dig.driver->MotionAt(0.0).pose);
+    system_->RemoveParticles(cut);
+    Status("scoopsim: pass %d starts buried: %zu particles removed from the tool\n", dig.pass,
+           cut.size());
+  }
+  dig.pass_t0 = system_->time();
+  dig.next_row = dig.pass_t0;
+  dig.rho = 0;
+  dig.touched = false;
+  system_->SetMeshMotion(dig.mesh, dig.driver->MotionAt(0.0));
+}
+
+void World::EndPass() {
+  Dig& dig = *dig_;
+  // Empty the scoop: the particles in its cavity are the sample of this pass.
+  double mass = 0;
+  const std::vector<int64_t> held = ParticlesInCavity(
+      system_->particles(), system_->mesh_motion(dig.mesh).pose, scene_.dig.scoop.cavity_min,
+      scene_.dig.scoop.cavity_max, &mass, &system_->clumps());
+  system_->RemoveParticles(held);
+  summary_.collected_mass.push_back(mass);
+  if (out_) {
+    out_->AppendRow("/scoop/collected_mass", &mass, 1);
+    const double count = static_cast<double>(held.size());
+    out_->AppendRow("/scoop/collected_count", &count, 1);
+  }
+  Status("scoopsim: pass %d: rho %.1f mm, collected %zu particles, %.4g kg\n", dig.pass,
+         1e3 * dig.rho, held.size(), mass);
+}
+
+bool World::Done() const {
+  if (dig_) return dig_->pass > scene_.dig.passes;
+  return !(system_->time() < t_start_ + scene_.duration - 0.5 * scene_.time_step);
+}
+
+double World::PlannedDuration() const { return dig_ ? dig_->planned : scene_.duration; }
+
+void World::RecordPlainRow() {
+  const double t = system_->time();
+  out_->AppendRow("/series/time", &t, 1);
+  const double ke = system_->KineticEnergy();
+  out_->AppendRow("/series/kinetic_energy", &ke, 1);
+  const double contacts = static_cast<double>(system_->neighbor_stats().contacts);
+  out_->AppendRow("/series/contacts", &contacts, 1);
+  std::vector<double> forces;
+  for (int k = 0; k < static_cast<int>(system_->config().planes.size()); ++k) {
+    const dem::Vec3 f = system_->plane_force(k);
+    forces.insert(forces.end(), {f.x, f.y, f.z});
+  }
+  out_->AppendRow("/series/wall_force", forces.data(), static_cast<int>(forces.size()));
+}
+
+void World::RecordDigRow() {
+  Dig& dig = *dig_;
+  const ScoopWrench& w = dig.wrench;
+  const double fm = dem::Norm(w.force_world);
+  summary_.peak_force = std::max(summary_.peak_force, fm);
+  summary_.peak_torque = std::max(summary_.peak_torque, dem::Norm(w.torque_world));
+  if (dig.touched) {
+    dig.force_sum += fm;
+    ++dig.force_rows;
+  }
+  if (!out_) return;
+  const double t = system_->time();
+  const double pass = dig.pass;
+  const dem::Pose& pose = system_->mesh_motion(dig.mesh).pose;
+  const double contacts = static_cast<double>(system_->mesh_wrench(dig.mesh).contacts);
+  const double awake = static_cast<double>(system_->neighbor_stats().awake);
+  const double pose7[7] = {pose.position.x,    pose.position.y,    pose.position.z,
+                           pose.orientation.w, pose.orientation.x, pose.orientation.y,
+                           pose.orientation.z};
+  out_->AppendRow("/scoop/time", &t, 1);
+  out_->AppendRow("/scoop/pass", &pass, 1);
+  out_->AppendRow("/scoop/rho", &dig.rho, 1);
+  Row3(out_, "/scoop/force_body", w.force_body);
+  Row3(out_, "/scoop/torque_body", w.torque_body);
+  Row3(out_, "/scoop/force_scoop", w.force_scoop);
+  Row3(out_, "/scoop/torque_scoop", w.torque_scoop);
+  Row3(out_, "/scoop/force_world", w.force_world);
+  Row3(out_, "/scoop/torque_world", w.torque_world);
+  out_->AppendRow("/scoop/pose", pose7, 7);
+  out_->AppendRow("/scoop/contacts", &contacts, 1);
+  out_->AppendRow("/series/time", &t, 1);
+  out_->AppendRow("/series/awake", &awake, 1);
+  const double ke = system_->KineticEnergy();
+  out_->AppendRow("/series/kinetic_energy", &ke, 1);
+}
+
+dem::StepStatus World::Step() {
+  dem::System& system = *system_;
+  if (!dig_) {
+    // A plain run: the particles alone, a /series/ row every output.interval.
+    if (!started_) StartPlain();
+    const dem::StepStatus status = system.Step();
+    if (!status.ok()) return status;
+    particle_steps_ += system.neighbor_stats().awake;
+    if (out_ && system.time() >= next_row_) {
+      RecordPlainRow();
+      next_row_ += scene_.output.interval;
+    }
+  } else {
+    Dig& dig = *dig_;
+    if (Done()) return {};
+    // The scoop's pose at the end of the coming step, where Step() evaluates forces.
+    const double tau = system.time() + scene_.time_step - dig.pass_t0;
+    system.SetMeshMotion(dig.mesh, dig.driver->MotionAt(tau));
+    const dem::StepStatus status = system.Step();
+    const dem::NeighborStats stats = system.neighbor_stats();
+    particle_steps_ += stats.awake;
+    summary_.peak_overlap = std::max(summary_.peak_overlap, stats.max_overlap);
+    if (!status.ok()) return status;
+    const dem::MeshWrench mw = system.mesh_wrench(dig.mesh);
+    const dem::Pose& pose = system.mesh_motion(dig.mesh).pose;
+    dig.driver->Feedback(tau, mw);
+    dig.wrench = ComputeScoopWrench(mw, pose, dig.com_scoop, dig.body);
+    const dem::Vec3 com = dem::Apply(pose, dig.com_scoop);
+    // rho (paper Figs. 9-11): horizontal displacement of the CoM along the trench since the
+    // scoop first touched a particle in this pass.
+    if (!dig.touched && mw.contacts > 0) {
+      dig.touched = true;
+      dig.com_contact = com;
+    }
+    if (dig.touched) dig.rho = dem::Dot(com - dig.com_contact, dig.trench);
+    if (system.time() >= dig.next_row) {
+      dig.next_row += scene_.dig.interval;
+      RecordDigRow();
+    }
+  }
+  const int64_t steps = system.step_count() - step0_;
+  if (out_ && scene_.output.snapshot_every > 0 && steps % scene_.output.snapshot_every == 0)
+    out_->WriteSnapshot(system.time(), system.particles());
+  // A pass ends when its driver says so; the next one begins at once.
+  while (dig_ && !Done() && dig_->driver->PassOver(system.time() - dig_->pass_t0)) {
+    EndPass();
+    if (++dig_->pass <= scene_.dig.passes) BeginPass();
+  }
+  return {};
+}
+
+WorldView World::View() const {
+  WorldView view;
+  view.time = system_->time();
+  view.particles = &system_->particles();
+  view.box_min = scene_.box_min;
+  view.box_max = scene_.box_max;
+  view.gravity = scene_.gravity;
+  if (dig_) {
+    view.pass = std::min(dig_->pass, scene_.dig.passes);
+    view.rho = dig_->rho;
+    view.force = dem::Norm(dig_->wrench.force_world);
+    view.torque = dem::Norm(dig_->wrench.torque_world);
+    view.meshes.push_back({&system_->mesh(dig_->mesh), system_->mesh_motion(dig_->mesh).pose});
+  }
+  return view;
+}
+
+void World::StartPlain() {
+  started_ = true;
+  system_->set_sleep(scene_.sleep);
+  t_start_ = next_row_ = system_->time();
+  step0_ = system_->step_count();
+  particle_steps_ = 0;
+  if (out_ && scene_.output.snapshot_every > 0)
+    out_->WriteSnapshot(system_->time(), system_->particles());
+}
+
+RunResult World::Run(const RunControl& control) {
+  dem::System& system = *system_;
+  if (!dig_ && !started_) StartPlain();
+  Progress progress(dig_ ? "dig" : "run", PlannedDuration(), control.quiet);
+  const auto wall0 = std::chrono::steady_clock::now();
+  const dem::PhaseTimes phases0 = system.phase_times();
+
+  // Frames at t0 and then every frame_every seconds, from this thread between steps, so no
+  // OpenMP region is active while a frame renders.
+  const double frame_every = control.frame_every > 0 ? control.frame_every
+                             : dig_                  ? 0.05
+                                                     : scene_.output.interval;
+  const double slack = 1e-3 * scene_.time_step;
+  double next_frame = system.time();
+  auto maybe_frame = [&] {
+    if (!control.on_frame || system.time() < next_frame - slack) return;
+    control.on_frame(View());
+    while (next_frame <= system.time() + slack) next_frame += frame_every;
+  };
+  maybe_frame();
+
+  RunResult result;
+  while (!Done()) {
+    const dem::StepStatus status = Step();
+    if (!status.ok()) {
+      Status("scoopsim: simulation unstable: %s\n", status.message.c_str());
+      result.exit_status = kExitUnstable;
+      break;
+    }
+    maybe_frame();
+    const int64_t steps = system.step_count() - step0_;
+    if (steps % 64 == 0) {
+      if (out_) out_->MaybeFlush();
+      progress.Update(system.time() - t_start_, particle_steps_);
+      if (StopRequested()) {
+        Status("scoopsim: stopped by signal %d at t = %.6g s; output closed\n", StopSignal(),
+               system.time());
+        result.exit_status = kExitStopped;
+        break;
+      }
+    }
+    if (control.stop_after > 0 && system.time() - t_start_ >= control.stop_after) {
+      Status("scoopsim: stopped at t = %.6g s (--stop-after); output closed\n", system.time());
+      result.stopped_after = true;
+      break;
+    }
+  }
+  progress.Finish(system.time() - t_start_, particle_steps_, Done());
+  result.wall = Seconds(std::chrono::steady_clock::now() - wall0);
+  if (dig_) {
+    summary_.mean_force = dig_->force_rows > 0 ? dig_->force_sum / dig_->force_rows : 0.0;
+    summary_.steps = system.step_count() - step0_;
+    summary_.simulated = system.time() - t_start_;
+    Status("scoopsim: dig: %lld particles, %lld steps, %.4g s simulated; peak |F| %.4g N, mean "
+           "|F| %.4g N (after first contact), peak |T| %.4g N m; %lld neighbour builds, %.3g "
+           "awake particle-steps per step\n",
+           static_cast<long long>(summary_.particles), static_cast<long long>(summary_.steps),
+           summary_.simulated, summary_.peak_force, summary_.mean_force, summary_.peak_torque,
+           static_cast<long long>(system.neighbor_stats().builds),
+           static_cast<double>(particle_steps_) / std::max<int64_t>(1, summary_.steps));
+    Status("scoopsim: dig: %.1f s wall: %s\n", result.wall,
+           PhaseBreakdown(PhasesSince(system.phase_times(), phases0), result.wall).c_str());
+  }
+  if (owned_out_) {
+    owned_out_->SetStateHash(system.StateHash());
+    owned_out_->SetAttribute("time", system.time());
+    owned_out_->Close();
+    Status("scoopsim: wrote %s (ParaView: %s)\n", owned_out_->path().c_str(),
+           owned_out_->xdmf_path().c_str());
+  }
+  return result;
+}
+
+}  // namespace sim

@@ -1,0 +1,117 @@
+// The run loop: one World owns the DEM system, the scoop and its driver, and the outputs, and
+// advances them together one step at a time. Every command goes through it: `scoopsim bed`
+// (Pour), `scoopsim run` with and without a dig, the shape study and `bench step`.
+//
+//   World world(scene, threads);
+//   world.LoadBed(path) or world.Pour(...)           the bed
+//   world.OpenOutput(path) / UseOutput(&out)         optional: HDF5 rows, snapshots
+//   world.StartDig(std::make_unique<KinematicDriver>(...))   optional: the scoop
+//   RunResult r = world.Run(control);                steps until the end, a signal or a fault
+//
+// Step() is the loop's body, usable on its own: it never throws and reports the step's health.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dem/system.h"
+#include "sim/bed.h"
+#include "sim/dig.h"
+#include "sim/h5_output.h"
+#include "sim/scene.h"
+#include "sim/scoop_driver.h"
+#include "sim/world_view.h"
+
+namespace sim {
+
+// What a dig measured, for callers that want numbers rather than the HDF5 file (tests,
+// studies). Magnitudes of the wrench in the world frame about the scoop CoM, over all rows.
+struct DigSummary {
+  double peak_force = 0;               // max |F| [N]
+  double mean_force = 0;               // mean |F| over the rows after first contact [N]
+  double peak_torque = 0;              // max |T| [N m]
+  double peak_overlap = 0;             // deepest overlap / smaller diameter over all steps [-]
+  std::vector<double> collected_mass;  // per pass [kg]
+  int64_t particles = 0;               // at the start of the dig
+  int64_t steps = 0;
+  double simulated = 0;  // [s]
+};
+
+// How Run() is watched and stopped.
+struct RunControl {
+  bool quiet = false;        // no progress line
+  double stop_after = 0;     // stop after this much simulated time [s] (0: run to the end)
+  FrameCallback on_frame;    // frames at the start and then every frame_every seconds
+  double frame_every = 0;    // [s]; 0 = output.interval (plain run), 0.05 s (dig)
+};
+
+struct RunResult {
+  int exit_status = 0;         // sim::ExitStatus
+  bool stopped_after = false;  // RunControl::stop_after ended it
+  double wall = 0;             // [s]
+};
+
+class World {
+ public:
+  // A world of `scene`'s model (materials, walls, step) and no particles yet. threads 0 = all.
+  World(const Scene& scene, int threads);
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  // The bed: a saved one (storage canonicalised), or poured and settled now with a progress line
+  // (returns kExitOk, kExitNotSettled with the bed kept, kExitUnstable or kExitStopped).
+  void LoadBed(const std::string& path);
+  int Pour(bool quiet, SettleReport* report);
+
+  // Outputs: a file of its own (created now), or a shared one (a study's groups).
+  void OpenOutput(const std::string& path);
+  void UseOutput(H5Output* out);
+  H5Output* output() { return out_; }
+
+  // Adds the scene's scoop mesh and starts its first pass under `driver`. Without it, Step()
+  // advances the particles alone (scene.sleep applies either way).
+  void StartDig(std::unique_ptr<ScoopDriver> driver);
+
+  // One step: the driver's motion for the end of the step, the DEM step, the wrench back to the
+  // driver, output rows; at a pass's end the sample is taken out and the next pass begins.
+  // Never throws; reports the step's health (the caller decides to stop).
+  dem::StepStatus Step();
+  // All passes done (a dig), or the scene's duration reached (a plain run).
+  bool Done() const;
+  // Steps until Done(), a fault, a signal or control.stop_after, with the progress line,
+  // periodic flushes and frames; ends with the summary lines and the output's final attributes.
+  RunResult Run(const RunControl& control);
+
+  // Simulated time the whole run is planned to take from the start [s].
+  double PlannedDuration() const;
+  const dem::System& system() const { return *system_; }
+  dem::System& mutable_system() { return *system_; }
+  const DigSummary& dig_summary() const { return summary_; }
+  const Scene& scene() const { return scene_; }
+
+ private:
+  struct Dig;
+  void StartPlain();
+  void RecordPlainRow();
+  void RecordDigRow();
+  void BeginPass();
+  void EndPass();
+  WorldView View() const;
+
+  Scene scene_;
+  std::unique_ptr<dem::System> system_;
+  std::unique_ptr<H5Output> owned_out_;
+  H5Output* out_ = nullptr;
+  std::unique_ptr<Dig> dig_;
+  DigSummary summary_;
+  bool started_ = false;  // a dig or a plain run has begun
+  double t_start_ = 0;    // time at which it began (after the bed) [s]
+  double next_row_ = 0;
+  int64_t step0_ = 0;
+  int64_t particle_steps_ = 0;  // of the awake particles (all of them without sleeping)
+};
+
+}  // namespace sim
