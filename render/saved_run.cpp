@@ -73,11 +73,11 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
     ++written;
     // A live line on a terminal; a line every 50 frames (and the last) otherwise.
     if (!quiet && tty) {
-      std::fprintf(stderr, "\rscoopsim render: frame %d/%zu (t = %.5f s)", written, snapshots.size(),
-                   snapshot.time);
+      std::fprintf(stderr, "\rscoopsim render: frame %d/%zu (t = %.5f s)", written,
+                   snapshots.size(), snapshot.time);
     } else if (!quiet && (written % 50 == 0 || written == static_cast<int>(snapshots.size()))) {
-      std::fprintf(stderr, "scoopsim render: frame %d/%zu (t = %.5f s)\n", written, snapshots.size(),
-                   snapshot.time);
+      std::fprintf(stderr, "scoopsim render: frame %d/%zu (t = %.5f s)\n", written,
+                   snapshots.size(), snapshot.time);
     }
   }
   if (!quiet && tty) std::fprintf(stderr, "\n");

@@ -84,7 +84,8 @@ ScoopSeries SavedRun::Scoop() const {
     return in.Exists(name) ? in.Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, n, width)
                            : std::vector<double>();
   };
-  for (double pass : column("/scoop/pass", 1)) s.pass.push_back(static_cast<int>(std::lround(pass)));
+  for (double pass : column("/scoop/pass", 1))
+    s.pass.push_back(static_cast<int>(std::lround(pass)));
   s.rho = column("/scoop/rho", 1);
   if (in.Exists("/scoop/force_world")) s.force_world = in.ReadVectors("/scoop/force_world", n);
   const std::vector<double> pose = column("/scoop/pose", 7);

@@ -23,11 +23,11 @@ struct SnapshotInfo {
 // The scoop's series of a dig (/scoop/...), one row per sample, all of equal length. Fields the
 // file lacks are empty.
 struct ScoopSeries {
-  std::vector<double> time;              // [s] (n), ascending
-  std::vector<int> pass;                 // dig pass, 1-based (n)
-  std::vector<double> rho;               // distance along the trench since first contact [m] (n)
-  std::vector<dem::Vec3> force_world;    // force on the scoop, world frame [N] (n)
-  std::vector<dem::Pose> pose;           // l_scoop -> world (n; stored as x y z qw qx qy qz)
+  std::vector<double> time;            // [s] (n), ascending
+  std::vector<int> pass;               // dig pass, 1-based (n)
+  std::vector<double> rho;             // distance along the trench since first contact [m] (n)
+  std::vector<dem::Vec3> force_world;  // force on the scoop, world frame [N] (n)
+  std::vector<dem::Pose> pose;         // l_scoop -> world (n; stored as x y z qw qx qy qz)
 
   bool empty() const { return time.empty(); }
   // The last sample at or before `t` (1e-9 s slack for rounding); -1 when there is none.

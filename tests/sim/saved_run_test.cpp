@@ -216,8 +216,10 @@ TEST(SavedRunTest, FilesThatAreNotRunsNameThePath) {
 
   // A stored render block LoadScene would refuse names the file, the line and the key.
   const std::string bad_render = (TempDir() / "bad_render.h5").string();
-  { H5Output out(bad_render, "box: {min: [0, 0, 0], max: [1, 1, 1]}\nrender: {size: [8, 8]}\n",
-                 "v"); }
+  {
+    H5Output out(bad_render, "box: {min: [0, 0, 0], max: [1, 1, 1]}\nrender: {size: [8, 8]}\n",
+                 "v");
+  }
   ExpectInputError([&] { SavedRun(bad_render).Scene(); },
                    {bad_render + ":scene_yaml:2: render.size", "[16, 4096]"});
 }
