@@ -8,18 +8,14 @@
 
 namespace render {
 
-// Renders each /snapshots/NNNNNN of `h5_path` into `frames`. The bed box comes from the scene
-// stored in the file (root attribute scene_yaml), else from the particles' extent. The caption
-// takes pass, rho and |force_world| from /scoop/{time,pass,rho,force_world} when the file has
-// them (the sample at or before the snapshot's time), else shows the time only. The scoop is
-// drawn from the mesh file named by the root attribute scoop_mesh at /scoop/pose (same sample);
-// a mesh that cannot be loaded any more is reported once and left out. Returns the number of frames
-// written. Throws sim::InputError for a file that cannot be read as a run or for a field the
-// snapshots lack (force: snapshots store no forces).
+// Renders each /snapshots/NNNNNN of `h5_path` into `frames`, read through sim::SavedRun. The bed
+// box comes from the scene stored in the file (root attribute scene_yaml), else from the
+// particles' extent. The caption takes pass, rho and |force_world| from /scoop/{time,pass,rho,
+// force_world} when the file has them (the sample at or before the snapshot's time), else shows
+// the time only. The scoop is drawn from the mesh file named by the root attribute scoop_mesh at
+// /scoop/pose (same sample); a mesh that cannot be loaded any more is reported once and left out.
+// Returns the number of frames written. Throws sim::InputError for a file that cannot be read as
+// a run or for a field the snapshots lack (force: snapshots store no forces).
 int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet);
-
-// The scene text stored in a saved run (root attribute scene_yaml); "" when it has none. Throws
-// sim::InputError when the file is not a readable HDF5 file.
-std::string ReadSceneYaml(const std::string& h5_path);
 
 }  // namespace render

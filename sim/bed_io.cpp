@@ -162,141 +162,6 @@ h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& syste
   return entry;
 }
 
-// Reads datasets of a bed file, turning every problem into an InputError naming file and dataset.
-class BedReader {
- public:
-  BedReader(const std::string& path, hid_t file) : path_(path), file_(file) {}
-
-  [[noreturn]] void Fail(const std::string& dataset, const std::string& message) const {
-    throw InputError(path_ + ": " + dataset + ": " + message);
-  }
-
-  // True if every link along the absolute `name` exists.
-  bool Exists(const std::string& name) const {
-    for (size_t slash = name.find('/', 1);; slash = name.find('/', slash + 1)) {
-      const std::string prefix = name.substr(0, slash);
-      htri_t exists = -1;
-      H5E_BEGIN_TRY { exists = H5Lexists(file_, prefix.c_str(), H5P_DEFAULT); }
-      H5E_END_TRY;
-      if (exists <= 0) return false;
-      if (slash == std::string::npos) return true;
-    }
-  }
-
-  // Reads a numeric dataset of shape (rows) for width 1 or (rows x width). `rows` < 0 accepts any
-  // row count; the count read is returned in *rows_read.
-  template <typename T>
-  std::vector<T> Read(const std::string& name, H5T_class_t type_class, hid_t memory_type,
-                      int64_t rows, hsize_t width, int64_t* rows_read = nullptr) const {
-    Handle dataset = Open(name);
-    Handle space(CheckId(H5Dget_space(dataset.get()), "H5Dget_space " + name), H5Sclose);
-    const int expected_rank = width == 1 ? 1 : 2;
-    hsize_t dims[H5S_MAX_RANK] = {};
-    const int rank = H5Sget_simple_extent_dims(space.get(), dims, nullptr);
-    const std::string want = rows < 0 ? "n" : std::to_string(rows);
-    const std::string expected =
-        "(" + want + (width == 1 ? std::string() : ", " + std::to_string(width)) + ")";
-    if (rank != expected_rank || (width > 1 && dims[1] != width) ||
-        (rows >= 0 && dims[0] != static_cast<hsize_t>(rows))) {
-      std::string got = "(";
-      for (int i = 0; i < rank; ++i) got += (i ? ", " : "") + std::to_string(dims[i]);
-      Fail(name, "expected shape " + expected + ", got " + got + ")");
-    }
-    Handle type(CheckId(H5Dget_type(dataset.get()), "H5Dget_type " + name), H5Tclose);
-    if (H5Tget_class(type.get()) != type_class) {
-      Fail(name, type_class == H5T_FLOAT ? "expected floating-point numbers" : "expected integers");
-    }
-    std::vector<T> values(dims[0] * width);
-    if (!values.empty()) {
-      herr_t status = -1;
-      H5E_BEGIN_TRY {
-        status = H5Dread(dataset.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
-      }
-      H5E_END_TRY;
-      if (status < 0) Fail(name, "cannot be read (damaged file?)");
-    }
-    if (rows_read != nullptr) *rows_read = static_cast<int64_t>(dims[0]);
-    return values;
-  }
-
-  std::vector<dem::Vec3> ReadVectors(const std::string& name, int64_t rows) const {
-    const std::vector<double> flat = Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, 3);
-    std::vector<dem::Vec3> out(static_cast<size_t>(rows));
-    for (size_t k = 0; k < out.size(); ++k)
-      out[k] = {flat[3 * k], flat[3 * k + 1], flat[3 * k + 2]};
-    return out;
-  }
-
-  std::vector<std::string> ReadStrings(const std::string& name) const {
-    Handle dataset = Open(name);
-    Handle space(CheckId(H5Dget_space(dataset.get()), "H5Dget_space " + name), H5Sclose);
-    hsize_t dims[H5S_MAX_RANK] = {};
-    if (H5Sget_simple_extent_dims(space.get(), dims, nullptr) != 1) {
-      Fail(name, "expected a 1-D list of strings");
-    }
-    Handle type(CheckId(H5Dget_type(dataset.get()), "H5Dget_type " + name), H5Tclose);
-    if (H5Tget_class(type.get()) != H5T_STRING) Fail(name, "expected strings");
-    const size_t n = dims[0];
-    std::vector<std::string> out;
-    if (n == 0) return out;
-    Handle memory_type(CheckId(H5Tcopy(type.get()), "H5Tcopy"), H5Tclose);
-    herr_t status = -1;
-    if (H5Tis_variable_str(type.get()) > 0) {
-      std::vector<char*> pointers(n, nullptr);
-      H5E_BEGIN_TRY {
-        status = H5Dread(dataset.get(), memory_type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT,
-                         pointers.data());
-      }
-      H5E_END_TRY;
-      if (status < 0) Fail(name, "cannot be read (damaged file?)");
-      for (char* s : pointers) out.emplace_back(s != nullptr ? s : "");
-      H5Dvlen_reclaim(memory_type.get(), space.get(), H5P_DEFAULT, pointers.data());
-    } else {
-      const size_t size = H5Tget_size(type.get());
-      std::vector<char> buffer(n * size);
-      H5E_BEGIN_TRY {
-        status =
-            H5Dread(dataset.get(), memory_type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data());
-      }
-      H5E_END_TRY;
-      if (status < 0) Fail(name, "cannot be read (damaged file?)");
-      for (size_t k = 0; k < n; ++k) {
-        const std::string s(buffer.data() + k * size, size);
-        out.push_back(s.substr(0, s.find('\0')));
-      }
-    }
-    return out;
-  }
-
-  double ReadRootDouble(const std::string& name) const {
-    htri_t exists = -1;
-    H5E_BEGIN_TRY { exists = H5Aexists_by_name(file_, "/", name.c_str(), H5P_DEFAULT); }
-    H5E_END_TRY;
-    if (exists <= 0) Fail("attribute " + name, "missing");
-    Handle attribute(CheckId(H5Aopen_by_name(file_, "/", name.c_str(), H5P_DEFAULT, H5P_DEFAULT),
-                             "H5Aopen " + name),
-                     H5Aclose);
-    Handle type(CheckId(H5Aget_type(attribute.get()), "H5Aget_type " + name), H5Tclose);
-    if (H5Tget_class(type.get()) != H5T_FLOAT) Fail("attribute " + name, "expected a number");
-    double value = 0;
-    CheckOk(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, &value), "H5Aread " + name);
-    return value;
-  }
-
- private:
-  Handle Open(const std::string& name) const {
-    if (!Exists(name)) Fail(name, "missing");
-    hid_t dataset = H5I_INVALID_HID;
-    H5E_BEGIN_TRY { dataset = H5Dopen2(file_, name.c_str(), H5P_DEFAULT); }
-    H5E_END_TRY;
-    if (dataset < 0) Fail(name, "not a dataset");
-    return Handle(dataset, H5Dclose);
-  }
-
-  std::string path_;
-  hid_t file_;
-};
-
 // The clumps of a bed file (see bed_io.h), read and checked against its particles.
 struct SavedClumps {
   std::vector<dem::ClumpTemplate> templates;
@@ -311,7 +176,7 @@ struct SavedClumps {
   size_t spheres(size_t c) const { return templates[shape[c]].radii.size(); }
 };
 
-SavedClumps ReadClumps(const BedReader& in, const std::vector<int64_t>& ids,
+SavedClumps ReadClumps(const h5::Reader& in, const std::vector<int64_t>& ids,
                        const std::vector<double>& radius, size_t num_materials) {
   SavedClumps s;
   if (!in.Exists("/clumps")) return s;
@@ -435,12 +300,8 @@ void LoadBed(const std::string& path, dem::System* system) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError(path + ": bed file not found");
-  hid_t file_id = H5I_INVALID_HID;
-  H5E_BEGIN_TRY { file_id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT); }
-  H5E_END_TRY;
-  if (file_id < 0) throw InputError(path + ": not a readable HDF5 file");
-  Handle file(file_id, H5Fclose);
-  const BedReader in(path, file.get());
+  const Handle file = h5::OpenForReading(path, false);
+  const h5::Reader in(path, file.get());
 
   // Read and check everything before touching the system.
   int64_t n = 0;
@@ -462,7 +323,7 @@ void LoadBed(const std::string& path, dem::System* system) {
   const std::vector<int64_t> b =
       in.Read<int64_t>("/contacts/b", H5T_INTEGER, H5T_NATIVE_INT64, m, 1);
   const std::vector<dem::Vec3> shear = in.ReadVectors("/contacts/shear", m);
-  const double time = in.ReadRootDouble("time");
+  const double time = in.ReadDoubleAttribute("/", "time");
   // Optional: which particles sleep (a mid-run state, e.g. bench/dig_state.py's).
   std::vector<uint8_t> awake;
   if (in.Exists("/particles/awake"))

@@ -1,14 +1,18 @@
 // Internal to sim/ (not a public header): RAII handles and helpers over the HDF5 C API shared by
-// the run output (h5_output.cpp) and the bed files (bed_io.cpp). Implemented in h5_output.cpp.
+// the run output (h5_output.cpp), the bed files (bed_io.cpp) and the reader of saved runs
+// (saved_run.cpp). Writing helpers are implemented in h5_output.cpp, reading ones (OpenForReading,
+// Reader) in h5_reader.cpp.
 #pragma once
 
 #include <hdf5.h>
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dem/system.h"
+#include "dem/vec3.h"
 
 namespace sim::h5 {
 
@@ -100,5 +104,66 @@ std::string XdmfPath(const std::string& h5_path);
 // Polyvertex grids (ParaView 5.11 needs the explicit connectivity item). Written to a temporary
 // file and renamed, so a reader never sees half a file. Throws std::runtime_error on I/O failure.
 void WriteXdmf(const std::string& h5_path, const std::vector<SnapshotEntry>& snapshots);
+
+// ---------------------------------------------------------------------------------------------
+// Reading
+
+// Opens `path` read-only. With `swmr_fallback`, a file HDF5 still marks as open for writing (a run
+// in progress, or one that was killed: see h5_output.h) is opened the SWMR way instead. Throws
+// sim::InputError "<path>: not a readable HDF5 file" when it cannot be opened either way.
+Handle OpenForReading(const std::string& path, bool swmr_fallback);
+
+// Reads the datasets and attributes of an open file, turning every problem (missing, wrong shape
+// or type, unreadable) into a sim::InputError that names the file and the object:
+// "out.h5: /snapshots/000003/radius: expected shape (12), got (11)". HDF5's own error stack is
+// silenced around the probes.
+class Reader {
+ public:
+  Reader(std::string path, hid_t file) : path_(std::move(path)), file_(file) {}
+
+  const std::string& path() const { return path_; }
+  hid_t file() const { return file_; }
+  [[noreturn]] void Fail(const std::string& object, const std::string& message) const;
+
+  // True if every link along the absolute `name` exists.
+  bool Exists(const std::string& name) const;
+  // The names of the links in group `name`, sorted; Fail when it is not a group.
+  std::vector<std::string> List(const std::string& name) const;
+
+  // Reads a numeric dataset of shape (rows) for width 1 or (rows x width) as `memory_type`, its
+  // stored type being of `type_class` (H5T_FLOAT, H5T_INTEGER). `rows` < 0 accepts any row
+  // count; the count read is returned in *rows_read.
+  template <typename T>
+  std::vector<T> Read(const std::string& name, H5T_class_t type_class, hid_t memory_type,
+                      int64_t rows, hsize_t width, int64_t* rows_read = nullptr) const {
+    const Handle dataset = OpenDataset(name);
+    const hsize_t n = CheckShape(name, dataset.get(), type_class, rows, width);
+    std::vector<T> values(static_cast<size_t>(n * width));
+    if (!values.empty()) ReadAll(name, dataset.get(), memory_type, values.data());
+    if (rows_read != nullptr) *rows_read = static_cast<int64_t>(n);
+    return values;
+  }
+  // Floating-point (rows x 3) as vectors; `rows` < 0 accepts any row count.
+  std::vector<dem::Vec3> ReadVectors(const std::string& name, int64_t rows) const;
+  // A 1-D dataset of strings (variable- or fixed-length).
+  std::vector<std::string> ReadStrings(const std::string& name) const;
+
+  // Attributes of the object `object` ("/" for the root group).
+  bool HasAttribute(const std::string& object, const std::string& attribute) const;
+  double ReadDoubleAttribute(const std::string& object, const std::string& attribute) const;
+  std::string ReadStringAttribute(const std::string& object, const std::string& attribute) const;
+
+ private:
+  Handle OpenDataset(const std::string& name) const;
+  // Checks rank, extent and type class of `dataset`; returns its row count.
+  hsize_t CheckShape(const std::string& name, hid_t dataset, H5T_class_t type_class, int64_t rows,
+                     hsize_t width) const;
+  void ReadAll(const std::string& name, hid_t dataset, hid_t memory_type, void* data) const;
+  // Opens attribute `attribute` of `object`; Fail when it is missing.
+  Handle OpenAttribute(const std::string& object, const std::string& attribute) const;
+
+  std::string path_;
+  hid_t file_;
+};
 
 }  // namespace sim::h5

@@ -882,10 +882,29 @@ Scene LoadScene(const std::string& path) {
   return scene;
 }
 
-RenderSpec LoadRenderSpec(const std::string& yaml_text, const std::string& name) {
+StoredScene ParseStoredScene(const std::string& yaml_text, const std::string& name) {
+  StoredScene stored;
   const YAML::Node root = Parse(name, yaml_text);
-  if (!root.IsMap() || !root["render"]) return RenderSpec{};
-  return ParseRender(name, root["render"]);
+  if (!root.IsMap()) return stored;
+  // Only the keys read here are checked (as LoadScene checks them); the others describe the run,
+  // not the world a reader of its file rebuilds, and may come from another version.
+  const auto only = [&root, &name](const char* key) {
+    YAML::Node map(YAML::NodeType::Map);
+    map[key] = root[key];
+    return MapReader(name, map, "", {key});
+  };
+  if (root["box"]) {
+    const MapReader box(name, root["box"], "box", {"min", "max", "wall_material"});
+    stored.box_min = box.Vector("min", "a list of 3 numbers [x, y, z] (m)");
+    stored.box_max = box.Vector("max", "a list of 3 numbers [x, y, z] (m)");
+    stored.has_box = true;
+  }
+  if (root["gravity"]) {
+    stored.gravity = only("gravity").Vector("gravity", "a list of 3 numbers [gx, gy, gz] (m/s^2)");
+    stored.has_gravity = true;
+  }
+  if (root["render"]) stored.render = ParseRender(name, root["render"]);
+  return stored;
 }
 
 }  // namespace sim

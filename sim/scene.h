@@ -131,9 +131,21 @@ std::vector<std::string> BuiltinClumpNames();
 // height); bed.file is cleared.
 Scene WithClumpBed(const Scene& scene, const dem::ClumpTemplate& t);
 
-// The `render:` block of a scene's text (for a saved run's stored scene); defaults when it has
-// none. `name` stands for the file in messages. Throws InputError like LoadScene.
-RenderSpec LoadRenderSpec(const std::string& yaml_text, const std::string& name);
+// What the scene text stored in a saved run (sim/saved_run.h) says about the world it ran in, for
+// a reader that rebuilds views of it. A whole LoadScene is not possible there: the materials
+// file and the bed are named relative to a folder that may be gone.
+struct StoredScene {
+  bool has_box = false;            // the text has box.min and box.max
+  dem::Vec3 box_min, box_max;      // container [m]
+  bool has_gravity = false;        // the text has gravity
+  dem::Vec3 gravity{0, 0, -9.81};  // [m/s^2]
+  RenderSpec render;               // the `render:` block; defaults when it has none
+};
+
+// Parses `box`, `gravity` and `render` of a stored scene text, each checked as LoadScene checks
+// it; other keys are not read. `name` stands for the file in messages ("out.h5:scene_yaml").
+// Throws InputError like LoadScene.
+StoredScene ParseStoredScene(const std::string& yaml_text, const std::string& name);
 
 // Loads a materials file into `table` (materials and their pair interactions). Throws InputError.
 void LoadMaterials(const std::string& path, dem::MaterialTable* table);

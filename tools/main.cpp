@@ -25,6 +25,7 @@
 #include "render/saved_run.h"
 #include "sim/commands.h"
 #include "sim/exit_status.h"
+#include "sim/saved_run.h"
 #include "sim/scene.h"
 
 namespace {
@@ -287,8 +288,7 @@ int Main(int argc, char** argv) {
     if (*render_cmd) {
       // Camera, colouring and size from the run's own scene (its `render:` block), then the
       // command line.
-      const sim::RenderSpec spec =
-          sim::LoadRenderSpec(render::ReadSceneYaml(render_input), render_input + ":scene_yaml");
+      const sim::RenderSpec spec = sim::SavedRun(render_input).Scene().render;
       render::FrameSequence frames(
           render_frames.Options(spec, render_threads > 0 ? render_threads : AllCores()));
       const int count = render::RenderSavedRun(render_input, &frames, render_quiet);
