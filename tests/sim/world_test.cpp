@@ -1,3 +1,7 @@
+// The run loop (sim/world.cpp). The golden state hash: scenes/tiny_dig.yaml (a bed of 1450
+// snow spheres poured, then one Table 1 pass) ends in the state whose hash is kTinyDigHash, on 1
+// and on 2 threads. When physics changes on purpose, update kTinyDigHash in the same commit and
+// say why there; any other change of it is a regression.
 // Determinism of a whole run through the CLI (scoopsim run): the same scene gives the same root
 // state_hash attribute with 1 and 2 threads, and in two runs; a run from a saved bed equals a run
 // that made the bed itself.
@@ -8,8 +12,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 
+#include "sim/exit_status.h"
+#include "sim/scene.h"
+#include "sim/world.h"
 #include "tests/cli_util.h"
 
 namespace {
@@ -52,6 +60,33 @@ uint64_t StateHash(const std::string& h5) {
   H5Aclose(attr);
   H5Fclose(file);
   return hash;
+}
+
+// History of kTinyDigHash (newest first):
+//   832715449e8ff685  2026-12-02  snow digs at 0.3 t_R kept tiny_dig at 0.25 t_R; value of record
+//                                 when the run loop became sim::World (no physics change).
+constexpr uint64_t kTinyDigHash = 0x832715449e8ff685ull;
+
+uint64_t TinyDigHash(int threads) {
+  const sim::Scene scene = sim::LoadScene(kSourceDir + "/scenes/tiny_dig.yaml");
+  sim::World world(scene, threads);
+  sim::SettleReport report;
+  EXPECT_EQ(world.Pour(true, &report), sim::kExitOk);
+  const sim::DigSpec& dig = scene.dig;
+  world.StartDig(std::make_unique<sim::KinematicDriver>(dig.trajectory, dig.heading,
+                                                        dig.bite_depth, dig.start_buried));
+  sim::RunControl control;
+  control.quiet = true;
+  EXPECT_EQ(world.Run(control).exit_status, sim::kExitOk);
+  EXPECT_TRUE(world.Done());
+  return world.system().StateHash();
+}
+
+TEST(WorldTest, GoldenStateHashOnOneAndTwoThreads) {
+  for (const int threads : {1, 2}) {
+    EXPECT_EQ(TinyDigHash(threads), kTinyDigHash) << threads << " thread(s): the physics changed; "
+                                                   "if on purpose, update kTinyDigHash and say why";
+  }
 }
 
 TEST(RunDeterminismTest, RunStateHashIndependentOfThreadsAndRepeatable) {
