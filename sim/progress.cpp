@@ -15,7 +15,7 @@ namespace sim {
 namespace {
 
 constexpr double kTtyPeriod = 0.25;      // seconds between rewrites of the live line
-constexpr double kFirstLine = 1.0;       // seconds before the first plain (not a terminal) line
+constexpr double kFirstLine = 0.5;       // seconds before the first plain (not a terminal) line
 constexpr double kSamplePeriod = 0.1;    // seconds between the samples of the recent rate
 constexpr double kMinWindow = 2.0;       // the recent past is at least this long [s]
 constexpr double kWindowFraction = 0.25; // and at least this share of the elapsed time

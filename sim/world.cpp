@@ -259,32 +259,61 @@ void World::RecordDigRow() {
   out_->AppendRow("/series/kinetic_energy", &ke, 1);
 }
 
-dem::StepStatus World::Step() {
+namespace {
+
+dem::StepStatus OutputFailed(double time, const std::exception& e) {
+  dem::StepStatus status;
+  status.flags = kOutputFailed;
+  status.time = time;
+  status.message = std::string("output failed: ") + e.what();
+  return status;
+}
+
+}  // namespace
+
+dem::StepStatus World::Step() noexcept {
   dem::System& system = *system_;
-  if (!dig_) {
-    // A plain run: the particles alone, a /series/ row every output.interval.
-    if (!started_) StartPlain();
+  try {
+    if (!dig_ && !started_) StartPlain();
+  } catch (const std::exception& e) {
+    return OutputFailed(system.time(), e);
+  }
+  if (Done()) return {};
+  if (dig_) {
+    // The scoop's pose at the end of the coming step, where Step() evaluates forces.
+    const double tau = system.time() + scene_.time_step - dig_->pass_t0;
+    system.SetMeshMotion(dig_->mesh, dig_->driver->MotionAt(tau));
+    const dem::StepStatus status = system.Step();
+    const dem::NeighborStats stats = system.neighbor_stats();
+    particle_steps_ += stats.awake;
+    summary_.peak_overlap = std::max(summary_.peak_overlap, stats.max_overlap);
+    if (!status.ok()) return status;
+    dig_->driver->Feedback(tau, system.mesh_wrench(dig_->mesh));
+  } else {
     const dem::StepStatus status = system.Step();
     if (!status.ok()) return status;
     particle_steps_ += system.neighbor_stats().awake;
+  }
+  try {
+    Record();
+  } catch (const std::exception& e) {
+    return OutputFailed(system.time(), e);
+  }
+  return {};
+}
+
+void World::Record() {
+  dem::System& system = *system_;
+  if (!dig_) {
+    // A plain run: a /series/ row every output.interval.
     if (out_ && system.time() >= next_row_) {
       RecordPlainRow();
       next_row_ += scene_.output.interval;
     }
   } else {
     Dig& dig = *dig_;
-    if (Done()) return {};
-    // The scoop's pose at the end of the coming step, where Step() evaluates forces.
-    const double tau = system.time() + scene_.time_step - dig.pass_t0;
-    system.SetMeshMotion(dig.mesh, dig.driver->MotionAt(tau));
-    const dem::StepStatus status = system.Step();
-    const dem::NeighborStats stats = system.neighbor_stats();
-    particle_steps_ += stats.awake;
-    summary_.peak_overlap = std::max(summary_.peak_overlap, stats.max_overlap);
-    if (!status.ok()) return status;
     const dem::MeshWrench mw = system.mesh_wrench(dig.mesh);
     const dem::Pose& pose = system.mesh_motion(dig.mesh).pose;
-    dig.driver->Feedback(tau, mw);
     dig.wrench = ComputeScoopWrench(mw, pose, dig.com_scoop, dig.body);
     const dem::Vec3 com = dem::Apply(pose, dig.com_scoop);
     // rho (paper Figs. 9-11): horizontal displacement of the CoM along the trench since the
@@ -307,7 +336,6 @@ dem::StepStatus World::Step() {
     EndPass();
     if (++dig_->pass <= scene_.dig.passes) BeginPass();
   }
-  return {};
 }
 
 WorldView World::View() const {
@@ -361,6 +389,11 @@ RunResult World::Run(const RunControl& control) {
   RunResult result;
   while (!Done()) {
     const dem::StepStatus status = Step();
+    if (status.flags & kOutputFailed) {
+      Status("scoopsim: %s\n", status.message.c_str());
+      result.exit_status = kExitFailure;
+      break;
+    }
     if (!status.ok()) {
       Status("scoopsim: simulation unstable: %s\n", status.message.c_str());
       result.exit_status = kExitUnstable;

@@ -39,6 +39,11 @@ struct DigSummary {
   double simulated = 0;  // [s]
 };
 
+// The run loop's own bit of the health mask World::Step() returns (dem's flags use the low bits,
+// dem/system.h): an output could not be written (disk full, file removed); the message says
+// which file and why. Run() stops with exit status 1.
+constexpr uint32_t kOutputFailed = 1u << 16;
+
 // How Run() is watched and stopped.
 struct RunControl {
   bool quiet = false;        // no progress line
@@ -77,8 +82,9 @@ class World {
 
   // One step: the driver's motion for the end of the step, the DEM step, the wrench back to the
   // driver, output rows; at a pass's end the sample is taken out and the next pass begins.
-  // Never throws; reports the step's health (the caller decides to stop).
-  dem::StepStatus Step();
+  // Never throws; reports the step's health, dem's flags and kOutputFailed (the caller decides
+  // to stop).
+  dem::StepStatus Step() noexcept;
   // All passes done (a dig), or the scene's duration reached (a plain run).
   bool Done() const;
   // Steps until Done(), a fault, a signal or control.stop_after, with the progress line,
@@ -95,6 +101,7 @@ class World {
  private:
   struct Dig;
   void StartPlain();
+  void Record();  // the rows, snapshots and pass changes that follow a step (may throw)
   void RecordPlainRow();
   void RecordDigRow();
   void BeginPass();
