@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# A/B speed of two (or more) scoopsim binaries on one benchmark command, as interleaved runs
+# (A, B, A, B, ...) so that a shared host's slow spells hit both alike. Prints each run's JSON
+# line, then per binary the median and the range of the chosen figure and the ratio of medians
+# against the first binary; appends one CSV row per run to bench/results/$MACHINE/$CSV.
+#
+#   BINS="/tmp/base/scoopsim build/scoopsim" bench/interleave.sh bench settle --threads 2
+#   BINS="/tmp/base/scoopsim build/scoopsim" KEY=ms_per_step \
+#     bench/interleave.sh bench step bench/cache/dig_state.yaml --threads 2
+#
+# Environment: BINS (required), NRUNS (5), KEY (the JSON figure: particle_steps_per_s for
+# settle, ms_per_step for step), LABEL (a word for the CSV rows), CSV (interleaved_pairs.csv),
+# MACHINE (hostname).
+set -euo pipefail
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+: "${BINS:?set BINS to the binaries to compare, first = baseline}"
+NRUNS=${NRUNS:-5}
+KEY=${KEY:-particle_steps_per_s}
+LABEL=${LABEL:-$1-$2}
+MACHINE=${MACHINE:-$(hostname -s 2>/dev/null || hostname)}
+RESDIR="$ROOT/bench/results/$MACHINE"
+CSV="$RESDIR/${CSV:-interleaved_pairs.csv}"
+mkdir -p "$RESDIR"
+[ -s "$CSV" ] || echo "date,label,binary,run,key,value,state_hash" >"$CSV"
+
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+for r in $(seq "$NRUNS"); do
+  for b in $BINS; do
+    line=$("$b" "$@")
+    echo "$b $line" | tee -a "$log"
+    /usr/bin/python3 - "$line" "$CSV" "$LABEL" "$b" "$r" "$KEY" <<'PY'
+import datetime, json, sys
+d = json.loads(sys.argv[1])
+_, csv, label, binary, run, key = sys.argv[1:]
+with open(csv, "a") as f:
+    f.write(",".join([datetime.datetime.utcnow().isoformat(timespec="seconds"), label, binary, run,
+                      key, str(d[key]), d.get("state_hash", "")]) + "\n")
+PY
+  done
+done
+/usr/bin/python3 - "$log" "$KEY" $BINS <<'PY'
+import json, statistics, sys
+log, key, bins = sys.argv[1], sys.argv[2], sys.argv[3:]
+runs = {b: [] for b in bins}
+for l in open(log):
+    b, j = l.split(" ", 1)
+    runs[b].append(json.loads(j)[key])
+base = statistics.median(runs[bins[0]])
+for b in bins:
+    v = runs[b]
+    m = statistics.median(v)
+    print(f"{b}: {key} median {m:.6g} (min {min(v):.6g}, max {max(v):.6g}, {len(v)} runs); "
+          f"ratio to {bins[0]}: {m / base:.4f}")
+PY
