@@ -397,8 +397,9 @@ struct MoveSource {
 
 // `moves:` the whole tool path as a list (sim/trajectory.h), each item a map with one of
 //   translate: [dx, dy, dz], speed (m/s), distance (m) or duration (s)
-//   rotate: [ax, ay, az] (world axis, right hand), rate (deg/s), angle (deg), about: [x, y, z]
-//           (a point of l_scoop, m; default the trajectory's pivot)
+//   rotate: [ax, ay, az] (world axis, right hand, before the dig's heading turns the whole
+//           path), rate (deg/s), angle (deg), about: [x, y, z] (a point of l_scoop, m;
+//           default the trajectory's pivot)
 //   hold: duration (s)
 // and an optional start (s; default when the previous move ends). Values are checked here with
 // their keys; their order and overlap by Trajectory, after.
