@@ -1,8 +1,10 @@
 #include "dem/mesh.h"
 
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace dem {
 
@@ -24,13 +26,25 @@ Subexpressions Subexpr(double w0, double w1, double w2) {
   return {f1, f2, f3, f2 + w0 * (f1 + w0), f2 + w1 * (f1 + w1), f2 + w2 * (f1 + w2)};
 }
 
+std::string Str(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 }  // namespace
+
+MeshError::MeshError(const std::string& mesh, std::string field, std::string expected,
+                     std::string got)
+    : std::invalid_argument("mesh '" + mesh + "': " + field + ": expected " + expected + ", got " +
+                            got),
+      field_(std::move(field)),
+      expected_(std::move(expected)),
+      got_(std::move(got)) {}
 
 MassProperties ComputeMassProperties(const TriangleMesh& mesh, double density) {
   if (!(density > 0) || !std::isfinite(density)) {
-    throw std::invalid_argument("ComputeMassProperties: mesh '" + mesh.name +
-                                "': density must be a finite number > 0, got " +
-                                std::to_string(density));
+    throw MeshError(mesh.name, "density", "a finite number > 0 [kg/m^3]", Str(density));
   }
   // Reference point: the mean vertex, so the integrals see coordinates of the mesh's own size.
   Vec3 ref;
@@ -44,9 +58,9 @@ MassProperties ComputeMassProperties(const TriangleMesh& mesh, double density) {
   for (const auto& tri : mesh.triangles) {
     for (int32_t i : tri) {
       if (i < 0 || i >= n_vertices) {
-        throw std::invalid_argument("ComputeMassProperties: mesh '" + mesh.name +
-                                    "': vertex index " + std::to_string(i) + " out of range [0, " +
-                                    std::to_string(n_vertices) + ")");
+        throw MeshError(mesh.name, "triangles",
+                        "vertex indices in [0, " + std::to_string(n_vertices) + ")",
+                        "index " + std::to_string(i));
       }
     }
     const Vec3 p0 = mesh.vertices[tri[0]] - ref;
@@ -73,10 +87,9 @@ MassProperties ComputeMassProperties(const TriangleMesh& mesh, double density) {
 
   const double volume = intg[0];
   if (!(volume > 0)) {
-    throw std::invalid_argument("ComputeMassProperties: mesh '" + mesh.name +
-                                "' encloses a volume of " + std::to_string(volume) +
-                                " m^3; expected > 0 (a closed mesh, counter-clockwise seen from "
-                                "outside)");
+    throw MeshError(mesh.name, "volume",
+                    "an enclosed volume > 0 (a closed mesh, counter-clockwise seen from outside)",
+                    Str(volume) + " m^3");
   }
 
   // Centre of mass relative to `ref`, then the second moments moved to it (parallel axes).

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -46,8 +47,24 @@ struct MassProperties {
 // Hazards: the mesh must be closed, with triangles counter-clockwise seen from outside; an open
 // mesh gives a meaningless answer. For a union of closed pieces that intersect (the scoop's
 // plates overlap at the joints), every overlap is counted once per piece that covers it.
-// Throws std::invalid_argument when density is not > 0, a vertex index is out of range or the
-// enclosed volume is not > 0 (an empty mesh, or one wound inside out).
+// Throws MeshError when density is not > 0 (field "density"), a vertex index is out of range
+// ("triangles") or the enclosed volume is not > 0 ("volume": an empty or open mesh, or one wound
+// inside out).
 MassProperties ComputeMassProperties(const TriangleMesh& mesh, double density);
+
+// A mesh, or an argument, that a computation on it refuses, as data in dem's own terms: `field`
+// names what is wrong ("density", "triangles", "volume"), `expected` and `got` say how (SI). A
+// caller reporting a user's file maps the field onto its own key. what() is one line naming the
+// mesh: "mesh 'NAME': FIELD: expected EXPECTED, got GOT".
+class MeshError : public std::invalid_argument {
+ public:
+  MeshError(const std::string& mesh, std::string field, std::string expected, std::string got);
+  const std::string& field() const { return field_; }
+  const std::string& expected() const { return expected_; }
+  const std::string& got() const { return got_; }
+
+ private:
+  std::string field_, expected_, got_;
+};
 
 }  // namespace dem

@@ -19,10 +19,12 @@ namespace sim {
 namespace {
 
 constexpr const char* kExpected =
-    "expected a triangle mesh file that assimp reads (STL, OBJ, PLY, glTF, ...)";
+    "a triangle mesh file that assimp reads (STL, OBJ, PLY, glTF, ...)";
 
-[[noreturn]] void Fail(const std::string& path, const std::string& what) {
-  throw InputError(path + ": " + what);
+// The file as a whole is wrong: no key (the caller reports it under its own key for the file).
+[[noreturn]] void Fail(const std::string& path, const std::string& expected,
+                       const std::string& got) {
+  throw InputError(path, 0, "", expected, got);
 }
 
 // An affine transform in double precision: x' = r x + t (rows of r).
@@ -94,14 +96,12 @@ void AppendNode(const aiScene& scene, const aiNode& node, const Affine& parent,
 
 dem::TriangleMesh LoadMesh(const std::string& path, double scale) {
   if (!(scale > 0) || !std::isfinite(scale)) {
-    std::ostringstream msg;
-    msg << "mesh scale must be a finite number > 0, got " << scale;
-    Fail(path, msg.str());
+    std::ostringstream got;
+    got << scale;
+    throw InputError(path, 0, "scale", "a finite number > 0 (mesh units to m)", got.str());
   }
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    Fail(path, std::string("no such file; ") + kExpected);
-  }
+  if (!std::filesystem::is_regular_file(path, ec)) Fail(path, kExpected, "no such file");
 
   // Positions only: with normals (flat-shaded STL) or texture coordinates still attached, the
   // corners that faces share would not be joined.
@@ -117,23 +117,22 @@ dem::TriangleMesh LoadMesh(const std::string& path, double scale) {
   if (scene == nullptr || scene->mRootNode == nullptr) {
     std::string why = importer.GetErrorString();
     std::replace(why.begin(), why.end(), '\n', ' ');  // one line
-    Fail(path, "cannot read the mesh (assimp: " + why + "); " + kExpected);
+    Fail(path, kExpected, "a file assimp cannot read (assimp: " + why + ")");
   }
 
   dem::TriangleMesh mesh;
   mesh.name = path;
   AppendNode(*scene, *scene->mRootNode, Affine{}, &mesh);
   if (mesh.triangles.empty()) {
-    Fail(path, std::string("the file holds no triangle; ") + kExpected);
+    Fail(path, kExpected, "a file that holds no triangle");
   }
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {
     dem::Vec3& v = mesh.vertices[i];
     v *= scale;
     if (!dem::IsFinite(v)) {
-      std::ostringstream msg;
-      msg << "vertex " << i << " is not finite (" << v.x << ", " << v.y << ", " << v.z
-          << "); expected finite coordinates";
-      Fail(path, msg.str());
+      std::ostringstream got;
+      got << "vertex " << i << " at (" << v.x << ", " << v.y << ", " << v.z << ")";
+      Fail(path, "a mesh whose vertices have finite coordinates", got.str());
     }
   }
   return mesh;

@@ -20,7 +20,8 @@ namespace sim {
 // vertex carries a relative error of about 6e-8 (a few nm on the scoop). name = `path`,
 // material = 0 (the caller sets it).
 // Throws sim::InputError, one line naming the file and what was expected, when the file is missing
-// or unreadable, holds no triangle, a vertex is not finite, or scale is not a finite number > 0.
+// or unreadable, holds no triangle, a vertex is not finite (key() ""), or scale is not a finite
+// number > 0 (key() "scale"). A scene reports it under its own key (sim::LoadScene).
 dem::TriangleMesh LoadMesh(const std::string& path, double scale = 1.0);
 
 }  // namespace sim

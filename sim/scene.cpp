@@ -18,6 +18,9 @@
 #include <utility>
 #include <vector>
 
+#include "dem/mesh.h"
+#include "sim/mesh_io.h"
+
 namespace sim {
 namespace {
 
@@ -75,10 +78,19 @@ std::string Join(const std::vector<std::string>& items, const char* sep = ", ") 
 [[noreturn]] void Fail(const std::string& file, int line, const std::string& key,
                        const std::string& expected, const std::string& got,
                        const std::string& note = "") {
-  std::string message =
-      file + ":" + std::to_string(line) + ": " + key + ": expected " + expected + ", got " + got;
+  throw InputError(file, line, key, expected, got, note);
+}
+
+std::string InputErrorMessage(const std::string& file, int line, const std::string& key,
+                              const std::string& expected, const std::string& got,
+                              const std::string& note) {
+  std::string message = file;
+  if (line > 0) message += ":" + std::to_string(line);
+  message += ": ";
+  if (!key.empty()) message += key + ": ";
+  message += "expected " + expected + ", got " + got;
   if (!note.empty()) message += " (" + note + ")";
-  throw InputError(message);
+  return message;
 }
 
 // Reads the whole file; false when it cannot be opened as a regular file.
@@ -200,6 +212,14 @@ class MapReader {
           value[i], Key(key), expected, [](double) { return true; }, &value);
     }
     return {c[0], c[1], c[2]};
+  }
+
+  // [x, y, z] of finite numbers, not all 0: a direction or an axis.
+  dem::Vec3 Direction(const char* key, const std::string& expected) const {
+    const dem::Vec3 v = Vector(key, expected);
+    if (!(dem::Norm(v) > 0))
+      Fail(file_, LineOf(node_[key]), Key(key), expected, Describe(node_[key]));
+    return v;
   }
 
   // Checks a scalar number; errors quote `whole` (the enclosing list) when given.
@@ -325,6 +345,9 @@ void ParseMaterials(const std::string& file, const YAML::Node& root, dem::Materi
 
 constexpr double kDeg = kPi / 180.0;
 
+// The preset's segments, in the order they run (the keys of dig.trajectory that override them).
+const char* const kSegments[] = {"approach", "rotation1", "linear", "rotation2"};
+
 // One move of a preset, by its name (approach, rotation1, linear, rotation2): `off` removes it, a
 // map overrides its start, speed and amount (adding it when the preset has none).
 // `speed_key`/`amount_key` name the keys (speed/distance in m/s and m, rate/angle in deg/s, deg).
@@ -332,7 +355,8 @@ void ParseSegment(const std::string& file, const MapReader& parent, const char* 
                   const char* speed_key, const char* amount_key, double unit, const Move& shape,
                   std::vector<Move>* moves) {
   if (!parent.Has(key)) return;
-  auto it = std::find_if(moves->begin(), moves->end(), [&](const Move& m) { return m.name == key; });
+  auto it =
+      std::find_if(moves->begin(), moves->end(), [&](const Move& m) { return m.name == key; });
   const YAML::Node node = parent.node()[key];
   if (node.IsScalar() && node.Scalar() == "off") {
     if (it != moves->end()) moves->erase(it);
@@ -351,14 +375,104 @@ void ParseSegment(const std::string& file, const MapReader& parent, const char* 
     *it = seg;
   } else {
     // In the order approach, rotation1, linear, rotation2.
-    static const char* const kOrder[] = {"approach", "rotation1", "linear", "rotation2"};
     auto rank = [](const std::string& n) {
-      return std::find_if(std::begin(kOrder), std::end(kOrder),
-                          [&](const char* o) { return n == o; }) - std::begin(kOrder);
+      return std::find_if(std::begin(kSegments), std::end(kSegments),
+                          [&](const char* o) { return n == o; }) -
+             std::begin(kSegments);
     };
     auto at = std::find_if(moves->begin(), moves->end(),
                            [&](const Move& x) { return rank(x.name) > rank(key); });
     moves->insert(at, seg);
+  }
+}
+
+// Where a move of the trajectory was written, for messages: the YAML node (the move's own map,
+// or the preset for a segment the scene left alone), its dotted key, and the YAML keys of the
+// move's fields where they differ from Move's names (TrajectoryError::field).
+struct MoveSource {
+  YAML::Node node;
+  std::string key;                            // "dig.trajectory.linear", "...moves[2]"
+  std::map<std::string, std::string> fields;  // "axis" -> "rotate", "distance" -> "duration"
+};
+
+// `moves:` the whole tool path as a list (sim/trajectory.h), each item a map with one of
+//   translate: [dx, dy, dz], speed (m/s), distance (m) or duration (s)
+//   rotate: [ax, ay, az] (world axis, right hand, before the dig's heading turns the whole
+//           path), rate (deg/s), angle (deg), about: [x, y, z] (a point of l_scoop, m;
+//           default the trajectory's pivot)
+//   hold: duration (s)
+// and an optional start (s; default when the previous move ends). Values are checked here with
+// their keys; their order and overlap by Trajectory, after.
+void ParseMoves(const std::string& file, const YAML::Node& node, std::vector<Move>* moves,
+                std::vector<MoveSource>* sources) {
+  const std::string list_key = "dig.trajectory.moves";
+  const std::string kinds = "one of translate: [dx, dy, dz], rotate: [ax, ay, az], hold: s";
+  if (!node.IsSequence() || node.size() == 0)
+    Fail(file, LineOf(node), list_key, "a non-empty list of moves, each a map with " + kinds,
+         Describe(node));
+  for (size_t i = 0; i < node.size(); ++i) {
+    const YAML::Node item = node[i];
+    const std::string name = "moves[" + std::to_string(i) + "]";
+    const std::string key = list_key + "[" + std::to_string(i) + "]";
+    std::vector<std::string> given;
+    if (item.IsMap())
+      for (const char* kind : {"translate", "rotate", "hold"})
+        if (item[kind]) given.emplace_back(kind);
+    if (given.size() != 1) {
+      Fail(file, LineOf(item), key, "a map with " + kinds,
+           given.empty() ? Describe(item) : "more than one (" + Join(given) + ")");
+    }
+    const double start_default = Move::kAfterPrevious;
+    const std::string start_expected = "a number >= 0 (s; default: when the previous move ends)";
+    MoveSource source{item, key, {}};
+    if (given[0] == "translate") {
+      const MapReader m(file, item, key, {"translate", "speed", "distance", "duration", "start"});
+      const std::string dir_expected =
+          "a list of 3 numbers [dx, dy, dz], not all 0 (direction of travel, world)";
+      const dem::Vec3 direction = m.Direction("translate", dir_expected);
+      const double speed = m.Number("speed", "a number > 0 (m/s)", Positive);
+      if (m.Has("distance") && m.Has("duration"))
+        Fail(file, LineOf(item["duration"]), m.Key("duration"),
+             "either distance (m) or duration (s)", "both");
+      double distance = 0;
+      if (m.Has("duration")) {
+        const double duration = m.Number("duration", "a number >= 0 (s)", NonNegative);
+        distance = speed * duration;
+        if (!std::isfinite(distance))
+          Fail(file, LineOf(item["duration"]), m.Key("duration"),
+               "a duration whose distance (speed * duration) is finite",
+               Describe(item["duration"]));
+        source.fields["distance"] = "duration";
+      } else {
+        distance = m.Number("distance", "a number >= 0 (m), or duration (s)", NonNegative);
+      }
+      const double start = m.Number("start", start_default, start_expected, NonNegative);
+      moves->push_back(Translate(name, direction, speed, distance, start));
+      source.fields["direction"] = "translate";
+    } else if (given[0] == "rotate") {
+      const MapReader m(file, item, key, {"rotate", "rate", "angle", "about", "start"});
+      const std::string axis_expected =
+          "a list of 3 numbers [ax, ay, az], not all 0 (axis, world, right hand)";
+      const dem::Vec3 axis = m.Direction("rotate", axis_expected);
+      const double rate = m.Number("rate", "a number > 0 (deg/s)", Positive) * kDeg;
+      const double angle = m.Number("angle", "a number >= 0 (deg)", NonNegative) * kDeg;
+      const double start = m.Number("start", start_default, start_expected, NonNegative);
+      if (m.Has("about")) {
+        const dem::Vec3 point = m.Vector("about", "a list of 3 numbers [x, y, z] (m, l_scoop)");
+        moves->push_back(RotateAbout(name, axis, rate, angle, point, start));
+      } else {
+        moves->push_back(Rotate(name, axis, rate, angle, start));
+      }
+      source.fields["axis"] = "rotate";
+      source.fields["point"] = "about";
+    } else {
+      const MapReader m(file, item, key, {"hold", "start"});
+      const double duration = m.Number("hold", "a number >= 0 (s)", NonNegative);
+      const double start = m.Number("start", start_default, start_expected, NonNegative);
+      moves->push_back(Hold(name, duration, start));
+      source.fields["duration"] = "hold";
+    }
+    sources->push_back(source);
   }
 }
 
@@ -379,6 +493,17 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
          scoop_node["mesh"].Scalar(), "no file " + scoop.mesh);
   }
   scoop.scale = sc.Number("scale", 1.0, "a number > 0 (mesh units to m)", Positive);
+  // The mesh itself, read once here (sim/mesh_io.h): assimp reads it, it has triangles, its
+  // vertices are finite. Its errors name the mesh file; here they name the scene's key.
+  try {
+    scoop.geometry = LoadMesh(scoop.mesh, scoop.scale);
+  } catch (const InputError& e) {
+    const std::string key = e.key() == "scale" ? "scale" : "mesh";
+    const YAML::Node at = scoop_node[key];
+    Fail(file, LineOf(at ? at : scoop_node), "dig.scoop." + key, e.expected(), e.got(),
+         "mesh file " + scoop.mesh);
+  }
+  scoop.geometry.name = "scoop";
   scoop.material = sc.String("material", "a material name");
   scoop.material_index = scene->materials.Find(scoop.material);
   if (scoop.material_index < 0) {
@@ -397,6 +522,26 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
   if (sc.Has("density") && (sc.Has("mass") || sc.Has("com")))
     Fail(file, LineOf(scoop_node["density"]), "dig.scoop.density",
          "either density (mass properties from the mesh) or mass and com", "both");
+  scoop.geometry.material = scoop.material_index;
+  if (scoop.density > 0) {
+    // Mass and CoM of the solid the mesh bounds (dem/mesh.h), which must be closed.
+    try {
+      const dem::MassProperties mp = dem::ComputeMassProperties(scoop.geometry, scoop.density);
+      scoop.mass = mp.mass;
+      scoop.com = mp.center_of_mass;
+    } catch (const dem::MeshError& e) {
+      // dem names its own fields: density; volume (not closed, or inside out); triangles.
+      if (e.field() == "volume") {
+        Fail(file, LineOf(scoop_node["density"]), "dig.scoop.density",
+             "a closed dig.scoop.mesh to take the mass and com from: " + e.expected(),
+             "a mesh that encloses " + e.got(),
+             "mesh file " + scoop.mesh + "; or give mass and com instead of density");
+      }
+      const std::string key = e.field() == "density" ? "density" : "mesh";
+      Fail(file, LineOf(scoop_node[key]), "dig.scoop." + key, e.expected(), e.got(),
+           "mesh file " + scoop.mesh);
+    }
+  }
   if (sc.Has("cavity")) {
     const MapReader cav(file, scoop_node["cavity"], "dig.scoop.cavity", {"min", "max"});
     scoop.cavity_min = cav.Vector("min", "a list of 3 numbers [x, y, z] (m, l_scoop)");
@@ -407,11 +552,11 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
              "every component greater than min's", Describe(scoop_node["cavity"]["max"]));
   }
 
-  // Trajectory: a preset, then overrides.
+  // Trajectory: a preset, then overrides of its segments or a list of moves that replaces them.
   const YAML::Node traj_node = d.Need("trajectory", "a map with keys preset, start, ...");
   const MapReader tr(file, traj_node, "dig.trajectory",
                      {"preset", "start", "heading", "pivot", "initial_pitch", "approach",
-                      "rotation1", "linear", "rotation2"});
+                      "rotation1", "linear", "rotation2", "moves"});
   dig.preset = tr.Has("preset") ? tr.String("preset", "table1, table4 or none") : "none";
   if (dig.preset == "table1") {
     dig.trajectory = Table1Preset();
@@ -441,30 +586,55 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
       tr.Number("initial_pitch", t.initial_pitch / kDeg, "a number in [-180, 180] (deg)",
                 [](double v) { return v >= -180 && v <= 180; }) *
       kDeg;
-  const dem::Vec3 pitch_down{0, -1, 0};
-  ParseSegment(file, tr, "approach", "speed", "distance", 1.0,
-               Translate("approach", {0, 0, -1}, 1, 0), &t.moves);
-  ParseSegment(file, tr, "rotation1", "rate", "angle", kDeg,
-               Rotate("rotation1", pitch_down, 1, 0), &t.moves);
-  ParseSegment(file, tr, "linear", "speed", "distance", 1.0, Translate("linear", {1, 0, 0}, 1, 0),
-               &t.moves);
-  ParseSegment(file, tr, "rotation2", "rate", "angle", kDeg,
-               Rotate("rotation2", pitch_down, 1, 0), &t.moves);
-  try {
-    Trajectory check(t);
-    (void)check;
-  } catch (const std::invalid_argument& e) {
-    // The message starts with the offending field ("linear.start: expected ..."); report it at
-    // that segment's line when the scene wrote it.
-    const std::string what = e.what();
-    const std::string field = what.substr(0, what.find(':'));
-    const std::string segment = field.substr(0, field.find('.'));
-    const YAML::Node at = traj_node[segment];
-    throw InputError(file + ":" + std::to_string(LineOf(at ? at : traj_node)) +
-                     ": dig.trajectory." + what);
+  std::vector<MoveSource> sources;  // one per move of t.moves
+  if (tr.Has("moves")) {
+    for (const char* segment : kSegments) {
+      if (tr.Has(segment)) {
+        Fail(file, LineOf(traj_node[segment]), tr.Key(segment),
+             "no segment override with dig.trajectory.moves (the list is the whole path)",
+             "both " + std::string(segment) + " and moves");
+      }
+    }
+    t.moves.clear();
+    ParseMoves(file, traj_node["moves"], &t.moves, &sources);
+  } else {
+    const dem::Vec3 pitch_down{0, -1, 0};
+    ParseSegment(file, tr, "approach", "speed", "distance", 1.0,
+                 Translate("approach", {0, 0, -1}, 1, 0), &t.moves);
+    ParseSegment(file, tr, "rotation1", "rate", "angle", kDeg,
+                 Rotate("rotation1", pitch_down, 1, 0), &t.moves);
+    ParseSegment(file, tr, "linear", "speed", "distance", 1.0, Translate("linear", {1, 0, 0}, 1, 0),
+                 &t.moves);
+    ParseSegment(file, tr, "rotation2", "rate", "angle", kDeg,
+                 Rotate("rotation2", pitch_down, 1, 0), &t.moves);
+    // A segment is reported at its own map when the scene wrote one, else at the preset.
+    for (const Move& m : t.moves) {
+      const YAML::Node own = traj_node[m.name];
+      const YAML::Node preset = traj_node["preset"];
+      sources.push_back({own ? own : (preset ? preset : traj_node), tr.Key(m.name), {}});
+    }
   }
   if (t.moves.empty())
     Fail(file, LineOf(traj_node), "dig.trajectory", "at least one segment (preset or map)", "none");
+  // The whole path by Trajectory's own rules (order and overlap of the starts, among others); its
+  // error names the move and field, mapped back to the key that wrote it.
+  try {
+    const Trajectory check(t);
+    (void)check;
+  } catch (const TrajectoryError& e) {
+    if (e.move() < 0) {
+      const std::string key = e.field() == "pivot_offset"  ? "pivot"
+                              : e.field() == "pivot_start" ? "start"
+                                                           : e.field();
+      const YAML::Node at = traj_node[key];
+      Fail(file, LineOf(at ? at : traj_node), tr.Key(key), e.expected(), e.got());
+    }
+    const MoveSource& source = sources.at(static_cast<size_t>(e.move()));
+    const auto mapped = source.fields.find(e.field());
+    const std::string key = mapped != source.fields.end() ? mapped->second : e.field();
+    const YAML::Node at = source.node.IsMap() ? source.node[key] : YAML::Node();
+    Fail(file, LineOf(at ? at : source.node), source.key + "." + key, e.expected(), e.got());
+  }
 
   dig.passes = static_cast<int>(d.Integer("passes", 1, "an integer in [1, 100]",
                                           [](int64_t v) { return v >= 1 && v <= 100; }));
@@ -637,6 +807,16 @@ void SetBedClump(BedSpec* bed, const dem::ClumpTemplate& t) {
 }
 
 }  // namespace
+
+InputError::InputError(std::string file, int line, std::string key, std::string expected,
+                       std::string got, std::string note)
+    : std::runtime_error(InputErrorMessage(file, line, key, expected, got, note)),
+      file_(std::move(file)),
+      line_(line),
+      key_(std::move(key)),
+      expected_(std::move(expected)),
+      got_(std::move(got)),
+      note_(std::move(note)) {}
 
 std::vector<std::string> BuiltinClumpNames() {
   std::vector<std::string> names;

@@ -9,17 +9,38 @@
 
 #include "dem/clump.h"
 #include "dem/material.h"
+#include "dem/mesh.h"
 #include "dem/system.h"
 #include "dem/vec3.h"
 #include "sim/trajectory.h"
 
 namespace sim {
 
-// Bad user input (scene, materials file, CLI value). what() is the one-line message to print;
-// the CLI exits with status 2.
+// Bad user input (scene, materials file, mesh or bed file, CLI value). what() is the one-line
+// message to print; the CLI exits with status 2. An error about one value carries it as data:
+// the file, the line (1-based; 0 when the file has no lines to speak of, like a mesh), the key
+// (a scene's dotted path "dig.trajectory.moves[2].rate", or a field's own name), what was
+// expected and what was there, so that a caller can report it under its own key without reading
+// the text back. An error made from a bare message (a file that cannot be opened) has only what().
 class InputError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit InputError(const std::string& message) : std::runtime_error(message) {}
+  // what() = "FILE:LINE: KEY: expected EXPECTED, got GOT (NOTE)", leaving out ":LINE" when line is
+  // 0, "KEY: " when key is empty and " (NOTE)" when note is.
+  InputError(std::string file, int line, std::string key, std::string expected, std::string got,
+             std::string note = "");
+
+  const std::string& file() const { return file_; }
+  int line() const { return line_; }
+  const std::string& key() const { return key_; }
+  const std::string& expected() const { return expected_; }
+  const std::string& got() const { return got_; }
+  const std::string& note() const { return note_; }
+
+ private:
+  std::string file_;
+  int line_ = 0;
+  std::string key_, expected_, got_, note_;
 };
 
 // How the bed is made (fill + settle) or where a saved one is loaded from.
@@ -50,14 +71,16 @@ struct OutputSpec {
 // The scoop: a triangle mesh in the l_scoop frame, its mass properties and the cavity that holds
 // the collected sample.
 struct ScoopSpec {
-  std::string mesh;      // mesh file (any format assimp reads), resolved against the scene
-  double scale = 1.0;    // mesh units -> m
-  std::string material;  // scoop material (key dig.scoop.material)
+  std::string mesh;            // mesh file (any format assimp reads), resolved against the scene
+  double scale = 1.0;          // mesh units -> m
+  dem::TriangleMesh geometry;  // that file as LoadScene read it (sim::LoadMesh at `scale`): SI,
+                               // l_scoop frame, name "scoop", material = material_index
+  std::string material;        // scoop material (key dig.scoop.material)
   int material_index = -1;
   double mass = 0.30936;                   // [kg] (FACTS.md section 2, l_scoop)
   dem::Vec3 com{0.001315, 0.0, 0.045328};  // centre of mass in l_scoop [m]
-  double density = 0;  // > 0: mass and CoM computed from the (closed) mesh at this density
-                       // [kg/m^3] instead of `mass` and `com`
+  double density = 0;  // > 0: `mass` and `com` were computed by LoadScene from the (closed)
+                       // mesh at this density [kg/m^3] (dem::ComputeMassProperties); 0: as given
   // Box of the l_scoop frame whose particles count as collected at the end of a pass [m]:
   // between the back plate, the blade, the side plates, the lid and the bottom (FACTS.md 3).
   dem::Vec3 cavity_min{-0.031, -0.0399, 0.0015};

@@ -28,24 +28,40 @@ double Progress(const Move& m, double t) {
 
 bool Active(const Move& m, double t) { return t >= m.start && t < EndOf(m); }
 
-[[noreturn]] void Invalid(const std::string& field, const std::string& expected, double got) {
-  std::ostringstream msg;
-  msg << field << ": expected " << expected << ", got " << got;
-  throw std::invalid_argument(msg.str());
+std::string Str(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
 }
 
-void CheckFinite(const std::string& field, const dem::Vec3& v) {
-  if (!dem::IsFinite(v)) {
-    std::ostringstream msg;
-    msg << field << ": expected finite coordinates, got (" << v.x << ", " << v.y << ", " << v.z
-        << ")";
-    throw std::invalid_argument(msg.str());
-  }
+std::string Str(const dem::Vec3& v) {
+  std::ostringstream s;
+  s << "(" << v.x << ", " << v.y << ", " << v.z << ")";
+  return s.str();
+}
+
+// `move` < 0: a field of the spec itself.
+[[noreturn]] void Invalid(int move, const std::string& name, const std::string& field,
+                          const std::string& expected, double got) {
+  throw TrajectoryError(move, name, field, expected, Str(got));
+}
+
+void CheckFinite(int move, const std::string& name, const std::string& field, const dem::Vec3& v) {
+  if (!dem::IsFinite(v)) throw TrajectoryError(move, name, field, "finite coordinates", Str(v));
 }
 
 bool Same(const dem::Vec3& a, const dem::Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
 
 }  // namespace
+
+TrajectoryError::TrajectoryError(int move, const std::string& move_name, std::string field,
+                                 std::string expected, std::string got)
+    : std::invalid_argument((move >= 0 ? move_name + "." : std::string()) + field + ": expected " +
+                            expected + ", got " + got),
+      move_(move),
+      field_(std::move(field)),
+      expected_(std::move(expected)),
+      got_(std::move(got)) {}
 
 Move Translate(std::string name, const dem::Vec3& direction, double speed, double distance,
                double start) {
@@ -114,46 +130,50 @@ dem::Quat PitchOrientation(double theta) {
 }
 
 Trajectory::Trajectory(const TrajectorySpec& spec) : spec_(spec) {
-  CheckFinite("pivot_offset", spec.pivot_offset);
-  CheckFinite("pivot_start", spec.pivot_start);
+  CheckFinite(-1, "", "pivot_offset", spec.pivot_offset);
+  CheckFinite(-1, "", "pivot_start", spec.pivot_start);
   if (!std::isfinite(spec.initial_pitch)) {
-    Invalid("initial_pitch", "a finite angle [rad]", spec.initial_pitch);
+    Invalid(-1, "", "initial_pitch", "a finite angle [rad]", spec.initial_pitch);
   }
   const Move* previous = nullptr;
   for (size_t i = 0; i < spec_.moves.size(); ++i) {
     Move& m = spec_.moves[i];
+    const int index = static_cast<int>(i);
     if (m.name.empty()) m.name = "moves[" + std::to_string(i) + "]";
     const std::string& n = m.name;
     const bool hold = m.kind == Move::Kind::kHold;
     const bool after_previous = m.start == Move::kAfterPrevious;
     if (!after_previous && !(m.start >= 0 && std::isfinite(m.start))) {
-      Invalid(n + ".start", "a finite time >= 0 [s]", m.start);
+      Invalid(index, n, "start", "a finite time >= 0 [s]", m.start);
     }
     if (!(m.speed > 0) || !std::isfinite(m.speed)) {
-      Invalid(n + (m.kind == Move::Kind::kRotate ? ".rate" : ".speed"), "a finite number > 0",
+      Invalid(index, n, m.kind == Move::Kind::kRotate ? "rate" : "speed", "a finite number > 0",
               m.speed);
     }
     if (!(m.amount >= 0) || !std::isfinite(m.amount)) {
-      Invalid(n + (hold ? ".duration" : m.kind == Move::Kind::kRotate ? ".angle" : ".distance"),
+      Invalid(index, n,
+              hold                            ? "duration"
+              : m.kind == Move::Kind::kRotate ? "angle"
+                                              : "distance",
               "a finite number >= 0", m.amount);
     }
     if (!hold) {
-      const char* what = m.kind == Move::Kind::kRotate ? ".axis" : ".direction";
-      CheckFinite(n + what, m.axis);
+      const char* what = m.kind == Move::Kind::kRotate ? "axis" : "direction";
+      CheckFinite(index, n, what, m.axis);
       const double length = dem::Norm(m.axis);
-      if (!(length > 0)) Invalid(n + what, "a vector of non-zero length", length);
+      if (!(length > 0)) Invalid(index, n, what, "a vector of non-zero length", length);
       if (length != 1) m.axis = (1 / length) * m.axis;
       if (m.about_pivot) m.point = spec_.pivot_offset;
-      CheckFinite(n + ".point", m.point);
+      CheckFinite(index, n, "point", m.point);
     }
     const double previous_end = previous ? EndOf(*previous) : 0.0;
     if (after_previous) {
       m.start = previous_end;
     } else if (previous != nullptr && m.start < previous_end - kOverlapSlack) {
-      std::ostringstream msg;
-      msg << n << ".start: expected a time >= " << previous_end << " s (the end of "
-          << previous->name << "; moves run in order without overlapping), got " << m.start;
-      throw std::invalid_argument(msg.str());
+      throw TrajectoryError(index, n, "start",
+                            "a time >= " + Str(previous_end) + " s (the end of " + previous->name +
+                                "; moves run in order without overlapping)",
+                            Str(m.start));
     }
     if (previous == nullptr) start_time_ = m.start;
     previous = &m;

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -31,12 +32,12 @@ struct Move {
   static constexpr double kAfterPrevious = -std::numeric_limits<double>::infinity();
   enum class Kind { kTranslate, kRotate, kHold };
   Kind kind = Kind::kHold;
-  std::string name;    // for messages: "approach", "moves[2]", ...
+  std::string name;               // for messages: "approach", "moves[2]", ...
   double start = kAfterPrevious;  // [s]; kAfterPrevious: when the previous one ends (first: 0)
-  dem::Vec3 axis;      // translate: unit direction of travel; rotate: unit axis (right hand),
-                       // both in world axes (before the dig's heading turns the whole path)
-  double speed = 1;    // [m/s] or [rad/s], > 0 (hold: 1, so that amount is its duration)
-  double amount = 0;   // [m], [rad] or (hold) [s], >= 0
+  dem::Vec3 axis;           // translate: unit direction of travel; rotate: unit axis (right hand),
+                            // both in world axes (before the dig's heading turns the whole path)
+  double speed = 1;         // [m/s] or [rad/s], > 0 (hold: 1, so that amount is its duration)
+  double amount = 0;        // [m], [rad] or (hold) [s], >= 0
   bool about_pivot = true;  // rotate: the axis passes through the path's pivot (pivot_offset)
   dem::Vec3 point;          // rotate, when not about_pivot: the point of l_scoop it passes
                             // through [m]
@@ -72,6 +73,26 @@ TrajectorySpec Table1Preset();
 // (6.2 s), ending at 9.2 s. initial_pitch 90 deg, pivot and pivot_start as Table1Preset.
 TrajectorySpec Table4Preset();
 
+// A TrajectorySpec that Trajectory refuses, as data: `move` is the index of the offending move in
+// spec.moves, or -1 for a field of the spec itself; `field` is that field's own name ("start",
+// "speed", "rate", "distance", "angle", "duration", "direction", "axis", "point"; or
+// "pivot_offset", "pivot_start", "initial_pitch"); `expected` and `got` are in the spec's units
+// (s, m, rad). The scene parser maps them to its YAML keys. what() is one line,
+// "NAME.FIELD: expected EXPECTED, got GOT" (NAME the move's name; no "NAME." for the spec's own).
+class TrajectoryError : public std::invalid_argument {
+ public:
+  TrajectoryError(int move, const std::string& move_name, std::string field, std::string expected,
+                  std::string got);
+  int move() const { return move_; }
+  const std::string& field() const { return field_; }
+  const std::string& expected() const { return expected_; }
+  const std::string& got() const { return got_; }
+
+ private:
+  int move_ = -1;
+  std::string field_, expected_, got_;
+};
+
 struct ScoopKinematics {
   dem::Pose pose;              // of the l_scoop frame in world
   dem::Vec3 velocity;          // of the l_scoop origin, world [m/s]
@@ -88,8 +109,8 @@ class Trajectory {
   // Validates the spec and resolves the move starts: finite values; for every move speed > 0,
   // amount >= 0, an axis of non-zero length (normalised here), start >= 0 when given and no
   // earlier than the previous move ends (1e-9 s of slack for rounding in amount / speed). Throws
-  // std::invalid_argument with a one-line message that starts with the move's name and field
-  // ("linear.start: ..."); the scene parser turns it into an InputError.
+  // TrajectoryError (a std::invalid_argument) naming the move and its field; the scene parser
+  // maps it onto the YAML key that wrote the value.
   explicit Trajectory(const TrajectorySpec& spec);
 
   // Pose and twist at time t [s], piecewise analytic: the pose is continuous (constant before

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +15,10 @@
 #include <ostream>
 #include <string>
 #include <vector>
+
+#include "dem/mesh.h"
+#include "sim/mesh_io.h"
+#include "sim/trajectory.h"
 
 namespace sim {
 namespace {
@@ -703,6 +708,260 @@ TEST(CliTest, CommandLineErrorsExitTwo) {
   EXPECT_EQ(RunCommand("run x.yaml --threads -3").status, 2);
   EXPECT_EQ(RunCommand("bench settle --particles 0").status, 2);
   EXPECT_EQ(RunCommand("bench settle --bogus").status, 2);
+}
+
+// ---------------------------------------------------------------------------------------------
+// (d) The dig block is validated whole at load: its mesh (read, triangles, finite vertices, closed
+// when a density is given), the scoop's density and every key of the trajectory, `moves:` items
+// included. Each error is an InputError that carries file, line and key as data.
+
+// The trajectory's moves of DigScene, lines 10-15.
+const std::string kMoves =
+    "    moves:\n"                                                                           // 10
+    "      - {translate: [0, 0, -1], speed: 0.14, distance: 0.028, start: 1.8}\n"            // 11
+    "      - {rotate: [0, -1, 0], rate: 90, angle: 90}\n"                                    // 12
+    "      - {translate: [1, 0, 0], speed: 0.3, duration: 0.1}\n"                            // 13
+    "      - {hold: 0.25}\n"                                                                 // 14
+    "      - {rotate: [0, 0, 1], rate: 45, angle: 30, about: [0.05, 0, 0.02], start: 4}\n";  // 15
+
+// A dig scene naming `mesh`; line numbers in the cases below refer to it.
+std::string DigScene(const std::string& mesh) {
+  return "materials: " + kSourceDir + "/scenes/materials.yaml\n" +               // 1
+         "gravity: [0, 0, -1.3]\n"                                               // 2
+         "box: {min: [0, 0, 0], max: [0.37, 0.17, 0.2], wall_material: wall}\n"  // 3
+         "bed: {material: snow, radius: 8.0e-3, count: 1450}\n"                  // 4
+         "dig:\n"                                                                // 5
+         "  scoop: {mesh: " +
+         mesh + ", material: aluminium}\n" +  // 6
+         "  trajectory:\n"                    // 7
+         "    preset: table1\n"               // 8
+         "    start: [0.13, 0.085]\n" +       // 9
+         kMoves +                             // 10-15
+         "duration: 1.0\n";                   // 16
+}
+
+const std::string kScoopStl = kSourceDir + "/assets/scoop.stl";
+
+// Small mesh files a scene may name: garbage bytes (400 of them: no binary STL's 84 + 50 n), an
+// OBJ without a triangle, one with a NaN vertex, one open triangle.
+std::string MeshFile(const std::string& name) {
+  const std::string path = (TempDir() / name).string();
+  std::ofstream f(path, std::ios::binary);
+  if (name == "garbage.stl") {
+    for (int i = 0; i < 400; ++i) f.put(static_cast<char>((i * 37 + 11) % 256));
+  } else if (name == "lines.obj") {
+    f << "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n";
+  } else if (name == "nan.obj") {
+    f << "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  } else if (name == "triangle.obj") {
+    f << "v 0 0 0\nv 0.01 0 0\nv 0 0.01 0\nf 1 2 3\n";
+  }
+  return path;
+}
+
+TEST(DigLoadTest, MovesListLoadsAsWritten) {
+  const Scene scene = LoadScene(WriteFile("moves_good.yaml", DigScene(kScoopStl)));
+  const TrajectorySpec& t = scene.dig.trajectory;
+  EXPECT_DOUBLE_EQ(t.initial_pitch, 0.5 * kPi);  // the preset's, kept with moves:
+  ASSERT_EQ(t.moves.size(), 5u);
+  const double deg = kPi / 180;
+  const Move expected[] = {Translate("", {0, 0, -1}, 0.14, 0.028, 1.8),
+                           Rotate("", {0, -1, 0}, 90 * deg, 90 * deg),
+                           Translate("", {1, 0, 0}, 0.3, 0.3 * 0.1), Hold("", 0.25),
+                           RotateAbout("", {0, 0, 1}, 45 * deg, 30 * deg, {0.05, 0, 0.02}, 4.0)};
+  for (size_t i = 0; i < t.moves.size(); ++i) {
+    SCOPED_TRACE(i);
+    const Move& m = t.moves[i];
+    const Move& e = expected[i];
+    EXPECT_EQ(m.name, "moves[" + std::to_string(i) + "]");
+    EXPECT_EQ(m.kind, e.kind);
+    EXPECT_EQ(m.axis.x, e.axis.x);
+    EXPECT_EQ(m.axis.y, e.axis.y);
+    EXPECT_EQ(m.axis.z, e.axis.z);
+    EXPECT_NEAR(m.speed, e.speed, 1e-15);
+    EXPECT_NEAR(m.amount, e.amount, 1e-15);
+    EXPECT_EQ(m.start, e.start);
+    EXPECT_EQ(m.about_pivot, e.about_pivot);
+    EXPECT_EQ(m.point.x, e.point.x);
+    EXPECT_EQ(m.point.z, e.point.z);
+  }
+  // Ends after the yaw that starts at 4 s: 30 deg at 45 deg/s.
+  EXPECT_NEAR(Trajectory(t).end_time(), 4.0 + 30.0 / 45.0, 1e-12);
+}
+
+// The mesh is read at load (and kept), and a density gives the mass and CoM there.
+TEST(DigLoadTest, MeshAndMassPropertiesAreMadeAtLoad) {
+  std::string text = DigScene(kScoopStl);
+  const Scene given = LoadScene(WriteFile("mesh_given.yaml", text));
+  EXPECT_EQ(given.dig.scoop.geometry.triangles.size(), 84u);
+  EXPECT_EQ(given.dig.scoop.geometry.material, given.materials.Find("aluminium"));
+  EXPECT_EQ(given.dig.scoop.mass, 0.30936);  // the default, as no density is given
+  text.replace(text.find("material: aluminium}"), 20, "material: aluminium, density: 2700}");
+  const Scene dense = LoadScene(WriteFile("mesh_density.yaml", text));
+  const dem::MassProperties mp = dem::ComputeMassProperties(LoadMesh(kScoopStl), 2700);
+  EXPECT_EQ(dense.dig.scoop.density, 2700);
+  EXPECT_EQ(dense.dig.scoop.mass, mp.mass);
+  EXPECT_EQ(dense.dig.scoop.com.x, mp.center_of_mass.x);
+  EXPECT_EQ(dense.dig.scoop.com.y, mp.center_of_mass.y);
+  EXPECT_EQ(dense.dig.scoop.com.z, mp.center_of_mass.z);
+}
+
+struct DigCase {
+  const char* name;
+  std::string from, to;  // edit of DigScene(MESH); MESH = the mesh below
+  std::string mesh;      // path of the mesh the scene names
+  int line;
+  std::string key;
+  std::string expect;  // a substring of what()
+};
+
+std::vector<DigCase> DigCases() {
+  const std::string stl = kScoopStl;
+  return {
+      {"missing_mesh", "", "", (TempDir() / "no_such_scoop.stl").string(), 6, "dig.scoop.mesh",
+       "no file"},
+      {"garbage_mesh", "", "", MeshFile("garbage.stl"), 6, "dig.scoop.mesh", "assimp"},
+      {"mesh_without_triangles", "", "", MeshFile("lines.obj"), 6, "dig.scoop.mesh", "no triangle"},
+      {"mesh_nan_vertex", "", "", MeshFile("nan.obj"), 6, "dig.scoop.mesh",
+       "expected a mesh whose vertices have finite coordinates"},
+      {"open_mesh_with_density", "material: aluminium}", "material: aluminium, density: 2700}",
+       MeshFile("triangle.obj"), 6, "dig.scoop.density", "expected a closed dig.scoop.mesh"},
+      {"negative_density", "material: aluminium}", "material: aluminium, density: -5}", stl, 6,
+       "dig.scoop.density", "expected a number > 0 (kg/m^3), got -5"},
+      {"zero_density", "material: aluminium}", "material: aluminium, density: 0}", stl, 6,
+       "dig.scoop.density", "got 0"},
+      {"unknown_trajectory_key", "    preset: table1", "    preset: table1\n    pivto: [0, 0, 0]",
+       stl, 9, "dig.trajectory.pivto", "an unknown key 'pivto'"},
+      {"zero_rate", "rate: 90", "rate: 0", stl, 12, "dig.trajectory.moves[1].rate",
+       "dig.trajectory.moves[1].rate: expected a number > 0 (deg/s), got 0"},
+      {"negative_rate", "rate: 90", "rate: -90", stl, 12, "dig.trajectory.moves[1].rate",
+       "got -90"},
+      {"zero_speed", "speed: 0.3", "speed: 0", stl, 13, "dig.trajectory.moves[2].speed",
+       "expected a number > 0 (m/s), got 0"},
+      {"negative_hold", "{hold: 0.25}", "{hold: -1}", stl, 14, "dig.trajectory.moves[3].hold",
+       "expected a number >= 0 (s), got -1"},
+      {"zero_axis", "rotate: [0, 0, 1]", "rotate: [0, 0, 0]", stl, 15,
+       "dig.trajectory.moves[4].rotate", "not all 0"},
+      {"infinite_direction", "translate: [1, 0, 0]", "translate: [.inf, 0, 0]", stl, 13,
+       "dig.trajectory.moves[2].translate", "got [.inf, 0, 0]"},
+      {"nan_about", "about: [0.05, 0, 0.02]", "about: [0.05, .nan, 0.02]", stl, 15,
+       "dig.trajectory.moves[4].about", "expected a list of 3 numbers"},
+      {"negative_start", "start: 1.8", "start: -1", stl, 11, "dig.trajectory.moves[0].start",
+       "got -1"},
+      {"overlapping_start", "start: 4}", "start: 2.5}", stl, 15, "dig.trajectory.moves[4].start",
+       "expected a time >= 3.35 s (the end of moves[3]; moves run in order without "
+       "overlapping), got 2.5"},
+      {"distance_and_duration", "duration: 0.1}", "duration: 0.1, distance: 0.03}", stl, 13,
+       "dig.trajectory.moves[2].duration", "expected either distance (m) or duration (s)"},
+      {"unknown_move_key", "{hold: 0.25}", "{hold: 0.25, sped: 1}", stl, 14,
+       "dig.trajectory.moves[3].sped", "expected one of the keys hold, start"},
+      {"two_kinds", "{hold: 0.25}", "{hold: 0.25, translate: [1, 0, 0]}", stl, 14,
+       "dig.trajectory.moves[3]", "got more than one (translate, hold)"},
+      {"no_kind", "{hold: 0.25}", "{start: 3.5}", stl, 14, "dig.trajectory.moves[3]",
+       "expected a map with one of translate"},
+      {"moves_and_segment", "    start: [0.13, 0.085]",
+       "    start: [0.13, 0.085]\n    linear: {speed: 0.1}", stl, 10, "dig.trajectory.linear",
+       "got both linear and moves"},
+      {"empty_moves", kMoves, "    moves: []\n", stl, 10, "dig.trajectory.moves",
+       "a non-empty list of moves"},
+  };
+}
+
+TEST(DigLoadTest, MalformedDigBlockIsRefusedAtLoadWithItsKey) {
+  for (const DigCase& c : DigCases()) {
+    SCOPED_TRACE(c.name);
+    std::string text = DigScene(c.mesh);
+    if (!c.from.empty()) {
+      const size_t at = text.find(c.from);
+      ASSERT_NE(at, std::string::npos) << "test bug: '" << c.from << "' not in the scene";
+      text.replace(at, c.from.size(), c.to);
+    }
+    const std::string path = WriteFile(std::string(c.name) + ".yaml", text);
+    try {
+      LoadScene(path);
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      EXPECT_EQ(e.file(), path);
+      EXPECT_EQ(e.line(), c.line) << m;
+      EXPECT_EQ(e.key(), c.key) << m;
+      EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+      EXPECT_EQ(m.rfind(path + ":" + std::to_string(c.line) + ": " + c.key + ": expected ", 0), 0u)
+          << m;
+      EXPECT_NE(m.find(c.expect), std::string::npos) << m;
+    }
+  }
+}
+
+// The CLI refuses such a scene before it makes or loads a bed: exit status 2, the one line and
+// nothing else (no bed or progress line), no output file, and at once (a bed of 1450 particles
+// takes far longer to pour).
+TEST(CliTest, BadDigBlockExitsTwoBeforeAnyParticle) {
+  const std::vector<DigCase> cases = DigCases();
+  for (const DigCase& c : cases) {
+    const std::string name = c.name;
+    if (name != "garbage_mesh" && name != "zero_rate" && name != "negative_density") continue;
+    SCOPED_TRACE(name);
+    std::string text = DigScene(c.mesh);
+    if (!c.from.empty()) text.replace(text.find(c.from), c.from.size(), c.to);
+    const std::string scene = WriteFile("cli_" + name + ".yaml", text);
+    const std::string out = (TempDir() / ("cli_" + name) / "run.h5").string();
+    const auto t0 = std::chrono::steady_clock::now();
+    const CommandResult r = RunCommand("run '" + scene + "' -o '" + out + "'");
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_EQ(CountLines(r.output), 1) << r.output;
+    EXPECT_EQ(
+        r.output.rfind(
+            "scoopsim: " + scene + ":" + std::to_string(c.line) + ": " + c.key + ": expected ", 0),
+        0u)
+        << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out));
+    EXPECT_LT(seconds, 10.0);
+  }
+}
+
+// scenes/lift_dig.yaml: tiny_dig's path (Table 1 with its shorter linear push, 0.05 m, and the
+// second rotation from 3.2 s) written out as a moves list, then a vertical lift of 0.06 m at
+// 0.1 m/s once the blade is up.
+TEST(DigLoadTest, LiftDigIsTable1ThenALift) {
+  const Scene lift = LoadScene(kSourceDir + "/scenes/lift_dig.yaml");
+  const Scene tiny = LoadScene(kSourceDir + "/scenes/tiny_dig.yaml");
+  TrajectorySpec expected = Table1Preset();
+  ASSERT_EQ(expected.moves[2].name, "linear");
+  expected.moves[2].amount = 0.05;  // tiny_dig's overrides: the box is 0.37 m long
+  ASSERT_EQ(expected.moves[3].name, "rotation2");
+  expected.moves[3].start = 3.2;
+  expected.moves.push_back(Translate("lift", {0, 0, 1}, 0.1, 0.06));
+  const TrajectorySpec& t = lift.dig.trajectory;
+  EXPECT_EQ(t.initial_pitch, expected.initial_pitch);
+  EXPECT_EQ(lift.dig.heading, tiny.dig.heading);
+  EXPECT_EQ(t.pivot_start.x, tiny.dig.trajectory.pivot_start.x);
+  EXPECT_EQ(t.pivot_start.y, tiny.dig.trajectory.pivot_start.y);
+  ASSERT_EQ(t.moves.size(), expected.moves.size());
+  for (size_t i = 0; i < t.moves.size(); ++i) {
+    SCOPED_TRACE(expected.moves[i].name);
+    const Move& m = t.moves[i];
+    const Move& e = expected.moves[i];
+    EXPECT_EQ(m.kind, e.kind);
+    EXPECT_EQ(m.axis.x, e.axis.x);
+    EXPECT_EQ(m.axis.y, e.axis.y);
+    EXPECT_EQ(m.axis.z, e.axis.z);
+    EXPECT_EQ(m.speed, e.speed);  // deg -> rad as the preset computes it: exactly equal
+    EXPECT_EQ(m.amount, e.amount);
+    EXPECT_EQ(m.start, e.start);
+    EXPECT_EQ(m.about_pivot, e.about_pivot);
+    if (i < tiny.dig.trajectory.moves.size()) {
+      EXPECT_EQ(m.speed, tiny.dig.trajectory.moves[i].speed);
+      EXPECT_EQ(m.amount, tiny.dig.trajectory.moves[i].amount);
+      EXPECT_EQ(m.start, tiny.dig.trajectory.moves[i].start);
+    }
+  }
+  // The lift runs from the end of the tilt (4.2 s) to 4.8 s and raises the pivot 0.06 m.
+  const Trajectory path(t);
+  EXPECT_NEAR(path.end_time(), 4.8, 1e-12);
+  EXPECT_NEAR(path.At(4.8).pivot.z - path.At(4.2).pivot.z, 0.06, 1e-12);
 }
 
 }  // namespace
