@@ -8,7 +8,6 @@
 
 #include "sim/bed_io.h"
 #include "sim/exit_status.h"
-#include "sim/mesh_io.h"
 #include "sim/progress.h"
 
 namespace sim {
@@ -110,23 +109,10 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver) {
   dig_ = std::make_unique<Dig>();
   Dig& dig = *dig_;
   dig.driver = std::move(driver);
-  dem::TriangleMesh mesh = LoadMesh(spec.scoop.mesh, spec.scoop.scale);
-  mesh.name = "scoop";
-  mesh.material = spec.scoop.material_index;
-  dig.mesh = system_->AddMesh(mesh);
-  // Mass properties: from the scene, or from the mesh at the scene's density.
-  double scoop_mass = spec.scoop.mass;
+  // The mesh and its mass properties were read and checked with the scene (LoadScene).
+  dig.mesh = system_->AddMesh(spec.scoop.geometry);
+  const double scoop_mass = spec.scoop.mass;
   dig.com_scoop = spec.scoop.com;
-  if (spec.scoop.density > 0) {
-    try {
-      const dem::MassProperties mp = dem::ComputeMassProperties(mesh, spec.scoop.density);
-      scoop_mass = mp.mass;
-      dig.com_scoop = mp.center_of_mass;
-    } catch (const std::invalid_argument& e) {
-      throw InputError(spec.scoop.mesh + ": dig.scoop.density needs a closed mesh (" + e.what() +
-                       ")");
-    }
-  }
   if (out_) {
     out_->SetAttribute("scoop_mesh", spec.scoop.mesh);
     out_->SetAttribute("scoop_mass", scoop_mass);
