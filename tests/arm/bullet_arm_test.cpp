@@ -8,6 +8,7 @@
 #include <random>
 
 #include "arm/controller.h"
+#include "arm/fault_monitor.h"
 #include "arm/kinematics.h"
 
 namespace arm {
@@ -399,6 +400,66 @@ TEST(BulletArmTest, WrenchActsForOneStepOnly) {
   a.Step(1e-3);
   b.Step(1e-3);
   EXPECT_LT((a.qd() - b.qd()).norm(), 1e-14);
+}
+
+// The whole loop without the DEM: the lander's PID holds the digging pose (gravity 1.3 m/s^2,
+// damping and friction on, dt = 5e-5 s) while an upward force on l_scoop_tip grows as 200 t N.
+// The first joint whose demanded torque reaches its effort limit, at t_c, must raise
+// JOINT_TORQUE_LIMIT (hold 0.1 s) at t_c + 0.1 s, within one step, and no flag of it before;
+// the stop-and-hold command holds the joints where that sample had them.
+TEST(ArmLoopTest, LoadRampRaisesTorqueLimitAfterTheHold) {
+  const ArmModel& m = Lander();
+  BulletArm arm(m, Options(true, true, true));
+  const Eigen::VectorXd pose = Pose("digging");
+  arm.SetJointState(pose);
+  JointPid pid(m, LanderGains());
+  FaultRules rules;
+  rules.torque_hold_time = 0.1;
+  rules.ft_joint.clear();
+  FaultMonitor monitor(m, rules);
+  const double dt = 5e-5;
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(6);
+  Eigen::VectorXd demanded, applied;
+  ArmSample sample;
+  sample.joints.resize(6);
+  std::vector<double> first_cross(6, -1);
+  std::vector<bool> dipped(6, false);
+  Eigen::VectorXd q_at_event;
+  for (int k = 0; k * dt < 1.0 && monitor.events().empty(); ++k) {
+    const double t = k * dt;
+    pid.Compute(pose, zero, arm.q(), arm.qd(), dt, &demanded, &applied);
+    sample.time = t;
+    for (int i = 0; i < 6; ++i) {
+      sample.joints[i] = JointSample{arm.q()[i], arm.qd()[i], demanded[i], applied[i]};
+      const bool over = std::abs(demanded[i]) >= m.joints[i].effort;
+      if (over && first_cross[i] < 0) first_cross[i] = t;
+      if (!over && first_cross[i] >= 0) dipped[i] = true;
+    }
+    monitor.Update(sample);
+    if (!monitor.events().empty()) q_at_event = arm.q();
+    arm.SetJointTorques(applied);
+    Wrench w;
+    w.force = Eigen::Vector3d(0, 0, 200 * t);
+    w.point = arm.LinkPose("l_scoop_tip").translation();
+    arm.ApplyWrench(6, w);
+    arm.Step(dt);
+  }
+  ASSERT_EQ(monitor.events().size(), 1u);
+  const FaultEvent& e = monitor.events()[0];
+  EXPECT_EQ(e.flag, kFaultJointTorqueLimit);
+  const int j = e.joint;
+  for (int i = 0; i < 6; ++i) {
+    if (i != j && first_cross[i] >= 0) {
+      EXPECT_GE(first_cross[i], first_cross[j]) << i;
+    }
+  }
+  EXPECT_FALSE(dipped[j]);
+  EXPECT_GE(e.time, first_cross[j] + 0.1 - 1e-9);
+  EXPECT_LE(e.time, first_cross[j] + 0.1 + dt + 1e-9);
+  EXPECT_EQ(monitor.command().kind, Reaction::kStopAndHold);
+  EXPECT_EQ(monitor.command().hold_positions, q_at_event);
+  std::printf("[ info ] %s saturated at %.4f s, JOINT_TORQUE_LIMIT at %.4f s\n",
+              m.joints[j].name.c_str(), first_cross[j], e.time);
 }
 
 }  // namespace
