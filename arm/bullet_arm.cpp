@@ -63,9 +63,13 @@ struct BulletArm::Impl {
   btAlignedObjectArray<btQuaternion> world_to_local;
   btAlignedObjectArray<btVector3> local_origin;
   std::vector<btScalar> unit, response;
-  // Implicit damping/friction: mass matrix, its inverse, the solve's vectors.
-  Eigen::MatrixXd inv_mass, mass, k;
-  Eigen::VectorXd v_free, b, v, damping, friction;
+  // Implicit damping/friction: mass matrix, its inverse, the solve's vectors (sized once: the
+  // step allocates nothing).
+  Eigen::MatrixXd inv_mass, mass, k, identity, k_sliding;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt_mass, ldlt_k, ldlt_sliding;
+  Eigen::VectorXd v_free, b, v, damping, friction, rhs, v_sliding, qd_old;
+  std::vector<int> sliding;
+  mutable std::vector<btVector3> omega, vel;  // link velocities for BodyTwist
   // Wrenches for the next step (world axes, force at the CoM, torque about the CoM).
   std::vector<Eigen::Vector3d> force, torque;
 
@@ -147,6 +151,16 @@ BulletArm::BulletArm(const ArmModel& model, const BulletArmOptions& options)
     impl_->colliders.push_back(std::move(collider));
   }
 
+  Impl& s = *impl_;
+  s.inv_mass = s.mass = s.k = s.identity = Eigen::MatrixXd::Identity(n, n);
+  s.ldlt_mass = Eigen::LDLT<Eigen::MatrixXd>(n);
+  s.ldlt_k = Eigen::LDLT<Eigen::MatrixXd>(n);
+  s.ldlt_sliding = Eigen::LDLT<Eigen::MatrixXd>(n);
+  s.v_free = s.b = s.v = s.rhs = s.v_sliding = s.qd_old = Eigen::VectorXd::Zero(n);
+  s.k_sliding = Eigen::MatrixXd::Zero(n, n);
+  s.sliding.reserve(n);
+  s.omega.resize(n + 1);
+  s.vel.resize(n + 1);
   impl_->unit.assign(6 + n, 0);
   impl_->response.assign(6 + n, 0);
   impl_->force.assign(nb, Eigen::Vector3d::Zero());
@@ -215,25 +229,28 @@ void BulletArm::SolveDissipation(double dt) {
   mb.computeAccelerationsArticulatedBodyAlgorithmMultiDof(0, s.scratch_r, s.scratch_v, s.scratch_m,
                                                           false, false, false);
   const btScalar* qdd = &s.scratch_r[mb.getNumDofs() + 6];
-  s.v_free.resize(n);
   for (int i = 0; i < n; ++i) s.v_free[i] = qd_[i] + dt * qdd[i];
   // M^-1 column by column: the joint accelerations of a unit joint torque.
-  s.inv_mass.resize(n, n);
   for (int j = 0; j < n; ++j) {
     std::fill(s.unit.begin(), s.unit.end(), 0);
     s.unit[6 + j] = 1;
     mb.calcAccelerationDeltasMultiDof(s.unit.data(), s.response.data(), s.scratch_r2, s.scratch_v2);
     for (int i = 0; i < n; ++i) s.inv_mass(i, j) = s.response[6 + i];
   }
-  s.inv_mass = 0.5 * (s.inv_mass + s.inv_mass.transpose());
-  s.mass = s.inv_mass.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j)
+      s.inv_mass(i, j) = s.inv_mass(j, i) = 0.5 * (s.inv_mass(i, j) + s.inv_mass(j, i));
+  }
+  s.ldlt_mass.compute(s.inv_mass);
+  s.mass = s.ldlt_mass.solve(s.identity);
   s.k = s.mass;
   s.k.diagonal() += dt * s.damping;
-  s.b = s.mass * s.v_free;
+  s.b.noalias() = s.mass * s.v_free;
 
   // Damping alone: v = K^-1 b. With friction: coordinate descent on the convex objective
   // (soft thresholding per joint), then the linear solve on the active set it found.
-  s.v = s.k.ldlt().solve(s.b);
+  s.ldlt_k.compute(s.k);
+  s.v = s.ldlt_k.solve(s.b);
   if (!s.friction.isZero()) {
     for (int sweep = 0; sweep < 100; ++sweep) {
       double change = 0;
@@ -247,27 +264,39 @@ void BulletArm::SolveDissipation(double dt) {
       if (change <= 1e-14 * (1 + s.v.cwiseAbs().maxCoeff())) break;
     }
     // Polish: sliding joints (v != 0) obey K v = b - dt friction sign(v), stuck ones v = 0.
-    std::vector<int> sliding;
+    std::vector<int>& sliding = s.sliding;
+    sliding.clear();
     for (int i = 0; i < n; ++i) {
       if (s.v[i] != 0) sliding.push_back(i);
     }
-    if (!sliding.empty()) {
+    if (!sliding.empty() && static_cast<int>(sliding.size()) < n) {
+      // The sliding joints' block, in the top-left corner of the preallocated matrices.
       const int m = static_cast<int>(sliding.size());
-      Eigen::MatrixXd ks(m, m);
-      Eigen::VectorXd rhs(m);
+      s.k_sliding.setIdentity();
+      s.rhs.setZero();
       for (int a = 0; a < m; ++a) {
-        rhs[a] = s.b[sliding[a]] - dt * s.friction[sliding[a]] * (s.v[sliding[a]] > 0 ? 1 : -1);
-        for (int c = 0; c < m; ++c) ks(a, c) = s.k(sliding[a], sliding[c]);
+        s.rhs[a] = s.b[sliding[a]] - dt * s.friction[sliding[a]] * (s.v[sliding[a]] > 0 ? 1 : -1);
+        for (int c = 0; c < m; ++c) s.k_sliding(a, c) = s.k(sliding[a], sliding[c]);
       }
-      const Eigen::VectorXd vs = ks.ldlt().solve(rhs);
+      s.ldlt_sliding.compute(s.k_sliding);
+      s.v_sliding = s.ldlt_sliding.solve(s.rhs);
       bool consistent = true;
-      for (int a = 0; a < m; ++a) consistent &= (vs[a] > 0) == (s.v[sliding[a]] > 0);
+      for (int a = 0; a < m; ++a) consistent &= (s.v_sliding[a] > 0) == (s.v[sliding[a]] > 0);
       if (consistent) {
-        for (int a = 0; a < m; ++a) s.v[sliding[a]] = vs[a];
+        for (int a = 0; a < m; ++a) s.v[sliding[a]] = s.v_sliding[a];
       }
+    } else if (!sliding.empty()) {
+      // All sliding: K v = b - dt friction sign(v).
+      for (int i = 0; i < n; ++i) s.rhs[i] = s.b[i] - dt * s.friction[i] * (s.v[i] > 0 ? 1 : -1);
+      s.v_sliding = s.ldlt_k.solve(s.rhs);
+      bool consistent = true;
+      for (int i = 0; i < n; ++i) consistent &= (s.v_sliding[i] > 0) == (s.v[i] > 0);
+      if (consistent) s.v = s.v_sliding;
     }
   }
-  last_dissipative_ = s.mass * (s.v - s.v_free) / dt;
+  s.v_free -= s.v;  // now v_free - v
+  last_dissipative_.noalias() = s.mass * s.v_free;
+  last_dissipative_ /= -dt;
   for (int i = 0; i < n; ++i) mb.addJointTorque(i, last_dissipative_[i]);
 }
 
@@ -285,10 +314,10 @@ void BulletArm::Step(double dt) {
   last_motor_ = tau_;
   SolveDissipation(dt);
 
-  const Eigen::VectorXd qd_old = qd_;
+  s.qd_old = qd_;
   s.world.stepSimulation(dt, 0, dt);  // one step of exactly dt
   Refresh();
-  qdd_ = (qd_ - qd_old) / dt;
+  qdd_ = (qd_ - s.qd_old) / dt;
   time_ += dt;
   tau_.setZero();
   for (int b = 0; b <= n; ++b) {
@@ -320,13 +349,11 @@ Twist BulletArm::BodyTwist(int body) const {
   Twist out;
   if (body == 0) return out;
   const btMultiBody& mb = *impl_->body;
-  const int n = dof();
   // Bullet's link velocities, in each link's own (principal) frame, CoM velocity.
-  std::vector<btVector3> omega(n + 1), vel(n + 1);
-  mb.compTreeLinkVelocities(omega.data(), vel.data());
+  mb.compTreeLinkVelocities(impl_->omega.data(), impl_->vel.data());
   const Eigen::Isometry3d frame = BulletLinkFrame(body);
-  out.angular = frame.linear() * Eig(omega[body]);
-  const Eigen::Vector3d v_com = frame.linear() * Eig(vel[body]);
+  out.angular = frame.linear() * Eig(impl_->omega[body]);
+  const Eigen::Vector3d v_com = frame.linear() * Eig(impl_->vel[body]);
   const Eigen::Vector3d origin = BodyPose(body).translation();
   out.linear = v_com + out.angular.cross(origin - frame.translation());
   return out;
