@@ -6,6 +6,7 @@
 //   scoopsim render OUT.h5 --frames DIR [--video] [--color-by F] [--camera PRESET]
 //   scoopsim bench render --particles N --frames F [--threads T]
 //   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
+//   scoopsim arm info URDF [--gravity G]     the parsed arm and its gravity torques
 // Exit status: sim/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
 // not settled, 130 stopped by a signal).
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
@@ -19,6 +20,7 @@
 #include <string>
 #include <thread>
 
+#include "arm/arm_model.h"
 #include "render/bench.h"
 #include "render/camera.h"
 #include "render/frames.h"
@@ -27,6 +29,7 @@
 #include "sim/exit_status.h"
 #include "sim/saved_run.h"
 #include "sim/scene.h"
+#include "tools/arm_info.h"
 
 namespace {
 
@@ -248,6 +251,17 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 9));
 
+  CLI::App* arm_cmd = app.add_subcommand("arm", "The arm alone (its URDF), without the DEM");
+  arm_cmd->require_subcommand(1);
+  CLI::App* arm_info = arm_cmd->add_subcommand(
+      "info", "Print the parsed arm (joints, limits, masses) and gravity torques at named poses");
+  std::string arm_urdf;
+  double arm_gravity = 1.3;
+  arm_info->add_option("URDF", arm_urdf, "The arm's URDF, e.g. assets/lander_arm.urdf")->required();
+  arm_info->add_option("--gravity", arm_gravity, "Gravity [m/s^2] along -z of the base link")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -311,6 +325,13 @@ int Main(int argc, char** argv) {
     if (*settle) return sim::BenchSettle(bench_options);
     if (*step) return sim::BenchStep(step_options);
     if (*bench_render) return render::BenchRender(render_bench);
+    if (*arm_info) {
+      tools::PrintArmInfo(arm_urdf, arm_gravity, stdout);
+      return 0;
+    }
+  } catch (const arm::ArmModelError& e) {
+    std::fprintf(stderr, "scoopsim: %s\n", OneLine(e.what()).c_str());
+    return kExitInput;
   } catch (const sim::InputError& e) {
     std::fprintf(stderr, "scoopsim: %s\n", OneLine(e.what()).c_str());
     return kExitInput;
