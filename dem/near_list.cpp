@@ -3,7 +3,7 @@
 // visited particles with plane candidates.
 #include <algorithm>
 
-#include "dem/grow.h"
+#include "dem/internal_grow.h"
 #include "dem/internal_phases.h"
 #include "dem/internal_workspace.h"
 

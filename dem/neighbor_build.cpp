@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "dem/clump.h"
-#include "dem/grow.h"
+#include "dem/internal_grow.h"
 #include "dem/internal_phases.h"
 #include "dem/internal_workspace.h"
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "dem/grow.h"
+#include "dem/internal_grow.h"
 #include "dem/internal_phases.h"
 #include "dem/internal_workspace.h"
 #include "dem/triangle.h"
