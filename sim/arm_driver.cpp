@@ -125,6 +125,7 @@ struct ArmDriver::Impl {
     sample.joints.resize(n);
     report.peak_demanded.assign(n, 0.0);
     report.saturation_time.assign(n, 0.0);
+    report.first_saturation.assign(n, std::numeric_limits<double>::quiet_NaN());
     for (const arm::Joint& j : model.joints) {
       report.joints.push_back(j.name);
       report.effort_limit.push_back(j.effort);
@@ -375,7 +376,10 @@ struct ArmDriver::Impl {
       j.applied = applied[i];
       const double d = std::abs(demanded[i]);
       report.peak_demanded[i] = std::max(report.peak_demanded[i], d);
-      if (d >= model.joints[i].effort) report.saturation_time[i] += h;
+      if (d >= model.joints[i].effort) {
+        report.saturation_time[i] += h;
+        if (std::isnan(report.first_saturation[i])) report.first_saturation[i] = sample.time;
+      }
     }
     sample.has_ft = sensor >= 0;
     sample.ft_force = ft_force;

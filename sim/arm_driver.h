@@ -44,9 +44,10 @@ namespace sim {
 // What the arm did over a run (also written as /arm/ datasets and printed by Finish()).
 struct ArmReport {
   std::vector<std::string> joints;
-  std::vector<double> peak_demanded;    // max |demanded torque| per joint [N m]
-  std::vector<double> effort_limit;     // per joint, derated [N m]
-  std::vector<double> saturation_time;  // time with |demanded| >= effort limit, per joint [s]
+  std::vector<double> peak_demanded;     // max |demanded torque| per joint [N m]
+  std::vector<double> effort_limit;      // per joint, derated [N m]
+  std::vector<double> saturation_time;   // time with |demanded| >= effort limit, per joint [s]
+  std::vector<double> first_saturation;  // time of the first step at or above it [s]; NaN: none
   struct Event {
     double time = 0;  // simulated time [s] (the /scoop/time clock)
     uint64_t flag = 0;

@@ -135,7 +135,10 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver) {
   if (out_) out_->SetAttribute("surface", surface);
   dig.bed = {&system_->mesh(dig.mesh), surface, bed_top + 2 * r_max, scene_.time_step,
              system_->time()};
-  AddObstacles();
+  if (!scene_.obstacles.empty()) {
+    AddObstacles();
+    dig.bed.mesh = &system_->mesh(dig.mesh);  // AddMesh may have moved the meshes
+  }
   dig.body = StudyBodyFrame(spec.heading, scene_.gravity);
   dig.trench = {std::cos(spec.heading), std::sin(spec.heading), 0.0};
   for (int pass = 1; pass <= spec.passes; ++pass)
