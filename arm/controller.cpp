@@ -29,6 +29,14 @@ JointPid::JointPid(const ArmModel& model, std::vector<PidGains> gains)
 
 void JointPid::Reset() { integral_.setZero(); }
 
+void JointPid::Preload(const Eigen::VectorXd& torques) {
+  for (int i = 0; i < static_cast<int>(joints_.size()); ++i) {
+    const PidGains& g = gains_[i];
+    integral_[i] =
+        g.i > 0 ? std::clamp(torques[i], -joints_[i].effort, joints_[i].effort) / g.i : 0.0;
+  }
+}
+
 void JointPid::Compute(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& qd_ref,
                        const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double dt,
                        Eigen::VectorXd* demanded, Eigen::VectorXd* applied) {

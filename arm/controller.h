@@ -54,6 +54,10 @@ class JointPid {
   // gains.size() == model.dof() (throws std::invalid_argument otherwise).
   JointPid(const ArmModel& model, std::vector<PidGains> gains);
   void Reset();  // integral terms to zero
+  // Sets the integral terms so that they alone give `torques` [N m] (e.g. the gravity torques of
+  // an arm that was holding itself up before the controller took over), within the anti-windup
+  // bound; joints with i = 0 keep zero.
+  void Preload(const Eigen::VectorXd& torques);
   // One control step of dt [s]: references and measured state in, demanded and applied torques
   // out (all of size dof()).
   void Compute(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& qd_ref,

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "sim/arm_driver.h"
 #include "sim/bed.h"
 #include "sim/bed_io.h"
 #include "sim/exit_status.h"
@@ -79,7 +80,10 @@ int RunScene(const Scene& scene, const RunOptions& options) {
     if (status != kExitOk) return status;
   }
   world.OpenOutput(options.output);
-  if (scene.dig.enabled) world.StartDig(KinematicDig(scene));
+  // The scoop on the arm (Bullet, coupled every step) when the scene has an arm, else on its path.
+  if (scene.dig.enabled)
+    world.StartDig(scene.arm.enabled ? std::unique_ptr<ScoopDriver>(new ArmDriver(scene))
+                                     : KinematicDig(scene));
   const RunResult result = world.Run(Control(options));
   if (options.dig_summary) *options.dig_summary = world.dig_summary();
   return result.exit_status;

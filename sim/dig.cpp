@@ -1,7 +1,10 @@
 #include "sim/dig.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
+#include <utility>
 #include <vector>
 
 #include "dem/triangle.h"
@@ -112,6 +115,57 @@ std::vector<int64_t> ParticlesTouchingMesh(const dem::Particles& p, const dem::T
   }
   std::sort(ids.begin(), ids.end());
   return ids;
+}
+
+std::vector<int64_t> ParticlesInSphere(const dem::Particles& p, const dem::Vec3& center,
+                                       double radius) {
+  std::vector<int64_t> ids;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const double reach = radius + p.radius[i];
+    if (dem::Norm2(p.x[i] - center) < reach * reach) ids.push_back(p.id[i]);
+  }
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+dem::TriangleMesh SphereMesh(double radius, int material, int subdivisions) {
+  // Icosahedron (vertices on the three golden rectangles), each face split in four per level,
+  // new vertices pushed out onto the sphere; faces counter-clockwise seen from outside.
+  const double g = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<dem::Vec3> v = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0},
+                              {0, -1, g}, {0, 1, g}, {0, -1, -g}, {0, 1, -g},
+                              {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+  std::vector<std::array<int32_t, 3>> f = {
+      {0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+      {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+      {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (dem::Vec3& x : v) x = (1.0 / dem::Norm(x)) * x;
+  for (int level = 0; level < subdivisions; ++level) {
+    std::map<std::pair<int32_t, int32_t>, int32_t> middle;
+    auto mid = [&](int32_t a, int32_t b) {
+      const auto key = std::minmax(a, b);
+      const auto it = middle.find(key);
+      if (it != middle.end()) return it->second;
+      const dem::Vec3 m = v[a] + v[b];
+      v.push_back((1.0 / dem::Norm(m)) * m);
+      return middle[key] = static_cast<int32_t>(v.size() - 1);
+    };
+    std::vector<std::array<int32_t, 3>> next;
+    for (const auto& t : f) {
+      const int32_t ab = mid(t[0], t[1]), bc = mid(t[1], t[2]), ca = mid(t[2], t[0]);
+      next.push_back({t[0], ab, ca});
+      next.push_back({t[1], bc, ab});
+      next.push_back({t[2], ca, bc});
+      next.push_back({ab, bc, ca});
+    }
+    f = std::move(next);
+  }
+  dem::TriangleMesh mesh;
+  mesh.name = "obstacle";
+  for (const dem::Vec3& x : v) mesh.vertices.push_back(radius * x);
+  mesh.triangles = std::move(f);
+  mesh.material = material;
+  return mesh;
 }
 
 double LowestBelowPivot(const dem::TriangleMesh& mesh, const dem::Quat& level,

@@ -51,6 +51,14 @@ std::vector<int64_t> ParticlesInCavity(const dem::Particles& p, const dem::Pose&
 std::vector<int64_t> ParticlesTouchingMesh(const dem::Particles& p, const dem::TriangleMesh& mesh,
                                            const dem::Pose& pose);
 
+// Persistent ids of the particles that overlap the sphere (centre, radius), sorted.
+std::vector<int64_t> ParticlesInSphere(const dem::Particles& p, const dem::Vec3& center,
+                                       double radius);
+
+// A sphere of `radius` about the body origin as a closed triangle mesh: an icosahedron split
+// `subdivisions` times (20 x 4^s faces; 2: 320 faces, within 2% of the radius).
+dem::TriangleMesh SphereMesh(double radius, int material, int subdivisions = 2);
+
 // Lowest point of the mesh along world z, relative to the pivot, when the scoop is level
 // (orientation `level`), with the pivot at `pivot_scoop` in the l_scoop frame [m] (negative).
 double LowestBelowPivot(const dem::TriangleMesh& mesh, const dem::Quat& level,

@@ -18,6 +18,8 @@
 #include <utility>
 #include <vector>
 
+#include "arm/arm_model.h"
+#include "arm/controller.h"
 #include "dem/mesh.h"
 #include "sim/mesh_io.h"
 
@@ -26,6 +28,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kMaxRayleighFraction = 0.3;  // DEM practice: dt in 0.2..0.3 t_R (paper eq. 4)
+constexpr double kMaxArmStep = 1e-4;  // the arm's Bullet step [s] (arm.substeps x time_step)
 
 // A double with 6 significant digits, for messages.
 std::string Num(double v) {
@@ -654,6 +657,196 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
   }
 }
 
+// Obstacles: fixed rigid spheres in the bed (a buried boulder).
+void ParseObstacles(const std::string& file, const YAML::Node& node, const std::string& wall,
+                    int bed_material, Scene* scene) {
+  const std::string expected = "a list of maps with keys sphere, material, stiffness";
+  if (!node.IsSequence() || node.size() == 0)
+    Fail(file, LineOf(node), "obstacles", expected, Describe(node));
+  for (size_t k = 0; k < node.size(); ++k) {
+    const std::string key = "obstacles[" + std::to_string(k) + "]";
+    const MapReader m(file, node[k], key, {"sphere", "material", "stiffness"});
+    const YAML::Node sphere_node = m.Need("sphere", "a map with keys center, radius");
+    const MapReader s(file, sphere_node, key + ".sphere", {"center", "radius"});
+    ObstacleSpec o;
+    o.center = s.Vector("center", "a list of 3 numbers [x, y, z] (m)");
+    o.radius = s.Number("radius", "a number > 0 (m)", Positive);
+    o.material = m.Has("material") ? m.String("material", "a material name") : wall;
+    o.material_index = scene->materials.Find(o.material);
+    const YAML::Node at = m.Has("material") ? node[k]["material"] : node[k];
+    if (o.material_index < 0)
+      Fail(file, LineOf(at), m.Key("material"), "a material defined in " + scene->materials_path,
+           o.material);
+    if (!scene->materials.has_interaction(bed_material, o.material_index))
+      Fail(file, LineOf(at), m.Key("material"),
+           "an interaction for the pair [" + scene->bed.material + ", " + o.material + "] in " +
+               scene->materials_path,
+           "none");
+    o.stiffness = m.Number("stiffness", o.stiffness, "a number > 0 (N/m)", Positive);
+    scene->obstacles.push_back(o);
+  }
+}
+
+// The arm block: the URDF (read and checked here, arm::LoadArmModel), where the base stands,
+// gains, derating, coupling and fault rules.
+void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
+  ArmSpec& a = scene->arm;
+  a.enabled = true;
+  const MapReader m(file, node, "arm",
+                    {"urdf", "base", "initial", "gains", "derate", "substeps", "timing",
+                     "velocity_margin", "faults"});
+  const std::string urdf_name =
+      m.Has("urdf") ? m.String("urdf", "the path of a URDF file") : "../assets/lander_arm.urdf";
+  a.urdf = ResolveAgainst(file, urdf_name);
+  const YAML::Node urdf_at = m.Has("urdf") ? node["urdf"] : node;
+  auto model = std::make_shared<arm::ArmModel>();
+  try {
+    *model = arm::LoadArmModel(a.urdf);
+  } catch (const arm::ArmModelError& e) {
+    Fail(file, LineOf(urdf_at), "arm.urdf", "a URDF the arm builder accepts", e.what());
+  }
+  const int n = model->dof();
+  auto joint_of = [&](const YAML::Node& key_node, const std::string& key) {
+    const int j = model->JointIndex(key_node.Scalar());
+    if (j < 0) {
+      std::vector<std::string> names;
+      for (const arm::Joint& joint : model->joints) names.push_back(joint.name);
+      Fail(file, LineOf(key_node), key, "a joint of the chain (" + Join(names) + ")",
+           key_node.Scalar());
+    }
+    return j;
+  };
+
+  if (m.Has("base")) {
+    const MapReader b(file, node["base"], "arm.base", {"position", "yaw", "reach", "height"});
+    if (b.Has("position") && (b.Has("reach") || b.Has("height")))
+      Fail(file, LineOf(node["base"]), "arm.base",
+           "either position (and yaw) or reach and height (placed at the dig)", "both");
+    if (b.Has("position")) {
+      a.base_given = true;
+      a.base_position = b.Vector("position", "a list of 3 numbers [x, y, z] (m, world)");
+      a.base_yaw = b.Number("yaw", 0.0, "a number (deg)", [](double) { return true; }) * kDeg;
+    } else if (b.Has("yaw")) {
+      Fail(file, LineOf(node["base"]["yaw"]), "arm.base.yaw", "yaw only with arm.base.position",
+           Describe(node["base"]["yaw"]), "placed at the dig, the base turns with dig.heading");
+    }
+    if (b.Has("reach")) {
+      const YAML::Node r = node["base"]["reach"];
+      const std::string expected = "a list of 2 numbers [x, y] (m, base frame)";
+      if (!r.IsSequence() || r.size() != 2)
+        Fail(file, LineOf(r), "arm.base.reach", expected, Describe(r));
+      a.reach_x = b.CheckNumber(
+          r[0], "arm.base.reach", expected, [](double) { return true; }, &r);
+      a.reach_y = b.CheckNumber(
+          r[1], "arm.base.reach", expected, [](double) { return true; }, &r);
+    }
+    a.base_height = b.Number("height", a.base_height, "a number (m)", [](double) { return true; });
+  }
+
+  a.initial = {0, kPi / 2, -kPi / 2, 0, 0, kPi / 2};  // the lander's pre-dig pose, yaw 0
+  a.initial.resize(n, 0.0);
+  if (m.Has("initial")) {
+    const YAML::Node v = node["initial"];
+    const std::string expected = "a list of " + std::to_string(n) + " joint angles (deg)";
+    if (!v.IsSequence() || static_cast<int>(v.size()) != n)
+      Fail(file, LineOf(v), "arm.initial", expected, Describe(v));
+    for (int i = 0; i < n; ++i)
+      a.initial[i] = m.CheckNumber(
+                         v[i], "arm.initial", expected, [](double) { return true; }, &v) *
+                     kDeg;
+  }
+
+  a.gains.clear();
+  for (int i = 0; i < n; ++i) {
+    const arm::PidGains g = i < 6 ? arm::kLanderGains[i] : arm::PidGains{};
+    a.gains.push_back({g.p, g.i, g.d});
+  }
+  if (m.Has("gains")) {
+    const YAML::Node g = node["gains"];
+    if (!g.IsMap()) Fail(file, LineOf(g), "arm.gains", "a map joint: [p, i, d]", Describe(g));
+    for (auto it = g.begin(); it != g.end(); ++it) {
+      const int j = joint_of(it->first, "arm.gains");
+      const std::string key = "arm.gains." + it->first.Scalar();
+      const std::string expected = "a list of 3 numbers [p, i, d] >= 0";
+      const YAML::Node v = it->second;
+      if (!v.IsSequence() || v.size() != 3) Fail(file, LineOf(v), key, expected, Describe(v));
+      for (int c = 0; c < 3; ++c)
+        a.gains[j][c] = m.CheckNumber(v[c], key, expected, NonNegative, &v);
+    }
+  } else if (n != 6) {
+    Fail(file, LineOf(urdf_at), "arm.gains", "gains for an arm that is not the lander's six joints",
+         "none", std::to_string(n) + " joints in " + a.urdf);
+  }
+
+  a.derate.assign(n, 1.0);
+  if (m.Has("derate")) {
+    const YAML::Node d = node["derate"];
+    if (!d.IsMap())
+      Fail(file, LineOf(d), "arm.derate", "a map joint: factor in (0, 1]", Describe(d));
+    for (auto it = d.begin(); it != d.end(); ++it) {
+      const int j = joint_of(it->first, "arm.derate");
+      a.derate[j] = m.CheckNumber(it->second, "arm.derate." + it->first.Scalar(),
+                                  "a number in (0, 1] (fraction of the URDF's effort limit)",
+                                  [](double v) { return v > 0 && v <= 1; });
+      model->joints[j].effort *= a.derate[j];
+    }
+  }
+  a.model = model;
+
+  a.substeps = static_cast<int>(m.Integer("substeps", 1, "an integer in [1, 100]",
+                                          [](int64_t v) { return v >= 1 && v <= 100; }));
+  if (m.Has("timing")) {
+    const std::string t = m.String("timing", "bullet_first or dem_first");
+    if (t == "bullet_first")
+      a.timing = CouplingTiming::kBulletFirst;
+    else if (t == "dem_first")
+      a.timing = CouplingTiming::kDemFirst;
+    else
+      Fail(file, LineOf(node["timing"]), "arm.timing", "bullet_first or dem_first", t);
+  }
+  a.velocity_margin = m.Number("velocity_margin", a.velocity_margin, "a number in (0, 1]",
+                               [](double v) { return v > 0 && v <= 1; });
+
+  if (m.Has("faults")) {
+    const YAML::Node fn = node["faults"];
+    const MapReader f(file, fn, "arm.faults",
+                      {"hold_time", "force_limit", "torque_limit", "sensor_joint", "sensor_rate",
+                       "reaction", "stop_hold", "retract"});
+    a.hold_time = f.Number("hold_time", a.hold_time, "a number >= 0 (s)", NonNegative);
+    a.force_limit = f.Number("force_limit", a.force_limit, "a number > 0 (N)", Positive);
+    a.torque_limit = f.Number("torque_limit", a.torque_limit, "a number > 0 (N m)", Positive);
+    if (f.Has("sensor_joint")) {
+      joint_of(fn["sensor_joint"], "arm.faults.sensor_joint");
+      a.sensor_joint = fn["sensor_joint"].Scalar();
+    }
+    a.sensor_rate = f.Number("sensor_rate", a.sensor_rate, "a number > 0 (1/s)", Positive);
+    if (f.Has("reaction")) {
+      const std::string r = f.String("reaction", "continue, stop or retract");
+      if (r == "continue")
+        a.reaction = ArmReaction::kContinue;
+      else if (r == "stop")
+        a.reaction = ArmReaction::kStop;
+      else if (r == "retract")
+        a.reaction = ArmReaction::kRetract;
+      else
+        Fail(file, LineOf(fn["reaction"]), "arm.faults.reaction", "continue, stop or retract", r);
+    }
+    a.stop_hold = f.Number("stop_hold", a.stop_hold, "a number >= 0 (s)", NonNegative);
+    if (f.Has("retract")) {
+      const MapReader r(file, fn["retract"], "arm.faults.retract",
+                        {"direction", "distance", "speed"});
+      if (r.Has("direction")) {
+        a.retract_direction = r.Direction("direction", "a list of 3 numbers, not all 0 (world)");
+        a.retract_direction = (1.0 / dem::Norm(a.retract_direction)) * a.retract_direction;
+      }
+      a.retract_distance = r.Number("distance", a.retract_distance, "a number > 0 (m)", Positive);
+      a.retract_speed = r.Number("speed", a.retract_speed, "a number > 0 (m/s)", Positive);
+    }
+  } else if (model->JointIndex(a.sensor_joint) < 0) {
+    a.sensor_joint.clear();  // another arm without the lander's sensor joint: no F/T monitoring
+  }
+}
+
 void ParseSleep(const std::string& file, const YAML::Node& node, dem::SleepConfig* sleep) {
   const MapReader m(file, node, "sleep",
                     {"enabled", "speed", "wake_speed", "wake_distance", "wake_margin",
@@ -849,10 +1042,10 @@ Scene LoadScene(const std::string& path) {
   if (!ReadFile(path, &scene.yaml_text)) throw InputError(path + ": cannot open scene file");
   const YAML::Node root = Parse(path, scene.yaml_text);
   if (root.IsNull()) Fail(path, 1, "(top level)", "a map of scene keys", "an empty file");
-  const MapReader top(
-      path, root, "",
-      {"materials", "gravity", "time_step", "neighbor", "box", "bed", "duration", "output",
-       "threads", "dig", "sleep", "render", "clump_templates", "health", "notes"});
+  const MapReader top(path, root, "",
+                      {"materials", "gravity", "time_step", "neighbor", "box", "bed", "duration",
+                       "output", "threads", "dig", "sleep", "render", "clump_templates", "health",
+                       "notes", "obstacles", "arm"});
 
   // Materials file, relative to the scene's folder.
   const std::string materials_expected = "the path of a readable materials file";
@@ -1057,8 +1250,22 @@ Scene LoadScene(const std::string& path) {
   // Frames (render/): camera, colouring, size, period.
   if (top.Has("render")) scene.render = ParseRender(path, root["render"]);
 
+  if (top.Has("obstacles"))
+    ParseObstacles(path, root["obstacles"], scene.wall_material, bed_material, &scene);
+  if (top.Has("arm")) ParseArm(path, root["arm"], &scene);
+
   // Derived time step and default skin.
   DeriveFromBed(&scene);
+  // The PID's explicit D term bounds the arm's step (arm/controller.h: dt < 2 I / d, about
+  // 1.2e-4 s on j_scoop_yaw); keep the Bullet step, substeps DEM steps, below 1e-4 s.
+  if (scene.arm.enabled && scene.arm.substeps * scene.time_step > kMaxArmStep) {
+    Fail(path, LineOf(root["arm"]["substeps"] ? root["arm"]["substeps"] : root["arm"]),
+         "arm.substeps",
+         "an integer <= " + Int(std::floor(kMaxArmStep / scene.time_step)) +
+             " (substeps x time step <= " + Num(kMaxArmStep) + " s)",
+         std::to_string(scene.arm.substeps),
+         "the PID's explicit D term is unstable above ~1.2e-4 s on j_scoop_yaw");
+  }
   return scene;
 }
 

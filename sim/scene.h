@@ -2,7 +2,9 @@
 // the key and what was expected: "scenes/x.yaml:12: bed.radius: expected a number > 0, got -1".
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -13,6 +15,10 @@
 #include "dem/system.h"
 #include "dem/vec3.h"
 #include "sim/trajectory.h"
+
+namespace arm {
+struct ArmModel;  // arm/arm_model.h: sim keeps it behind a pointer (no Eigen in this header)
+}
 
 namespace sim {
 
@@ -117,6 +123,59 @@ struct RenderSpec {
 // lists agree).
 inline const char* const kRenderCameraPresets[] = {"trench_side", "trench_oblique", "top"};
 
+// A fixed rigid sphere in the bed (key `obstacles:`, a buried boulder). The particles meet it as
+// a fixed triangle mesh (World::StartDig takes out the particles it overlaps); a scoop held by the
+// arm meets it as a rigid sphere (sim/arm_driver.h); a kinematic scoop passes through it.
+struct ObstacleSpec {
+  dem::Vec3 center;      // [m], world
+  double radius = 0;     // [m]
+  std::string material;  // DEM material of its surface (default: box.wall_material)
+  int material_index = -1;
+  double stiffness = 2e6;  // scoop-sphere contact stiffness [N/m] (linear penalty)
+};
+
+// When the arm (Bullet) and the DEM exchange pose and wrench (ARCHITECTURE.md, "The arm in the
+// loop"). kBulletFirst: Bullet steps first with the wrench of the last DEM step, so the DEM gets
+// the pose at the end of its coming step. kDemFirst: the DEM steps first with the pose Bullet
+// had at the start of the step (a one-step lag), then Bullet steps with that step's wrench.
+enum class CouplingTiming { kBulletFirst, kDemFirst };
+// What the arm does on a fault (torque, position and force/torque limits): arm::Reaction.
+enum class ArmReaction { kContinue, kStop, kRetract };
+
+// The arm that holds the scoop (key `arm:`; sim/arm_driver.h). Angles in rad, SI units.
+struct ArmSpec {
+  bool enabled = false;
+  std::string urdf;                            // resolved against the scene's folder
+  std::shared_ptr<const arm::ArmModel> model;  // the URDF as LoadScene read it, efforts derated
+  // base_link in the DEM world: given (base.position, base.yaw), or placed at the first pass so
+  // that the base-frame point (reach x, reach y, -base_height) lies under the path's start pivot
+  // on the bed's surface, base yaw = the dig's heading (the lander's ground plane is 0.172 m
+  // below base_link, FACTS.md section 2).
+  bool base_given = false;
+  dem::Vec3 base_position;
+  double base_yaw = 0;
+  double reach_x = 1.55, reach_y = 0.175;    // [m], base frame
+  double base_height = 0.172;                // [m]
+  std::vector<double> initial;               // IK seed for the path's first pose (dof entries)
+  std::vector<std::array<double, 3>> gains;  // p, i, d per joint (default: the lander's)
+  std::vector<double> derate;                // effort-limit factor per joint, in (0, 1]
+  int substeps = 1;                          // DEM steps per Bullet step (averaged wrench)
+  CouplingTiming timing = CouplingTiming::kBulletFirst;
+  double velocity_margin = 0.9;  // the path is slowed until every joint stays below this
+                                 // fraction of its velocity limit
+  // Fault rules (arm/fault_monitor.h) and the reaction to torque, position and F/T limits.
+  double hold_time = 0.1;     // JOINT_TORQUE_LIMIT hold time [s]
+  double force_limit = 200;   // [N]
+  double torque_limit = 100;  // [N m]
+  std::string sensor_joint = "j_dist_pitch";
+  double sensor_rate = 200;  // F/T sensor samples per second [1/s]
+  ArmReaction reaction = ArmReaction::kStop;
+  double stop_hold = 0.25;               // a stopped pass ends this long after the stop [s]
+  dem::Vec3 retract_direction{0, 0, 1};  // world, unit
+  double retract_distance = 0.05;        // [m]
+  double retract_speed = 0.02;           // [m/s]
+};
+
 struct Scene {
   std::string path;       // the scene file as given
   std::string yaml_text;  // its full text (stored as the HDF5 attribute scene_yaml)
@@ -140,6 +199,8 @@ struct Scene {
                               // (dem::SystemConfig::max_overlap_fraction)
   std::vector<dem::ClumpTemplate> clump_templates;  // the scene's own (key clump_templates)
   RenderSpec render;
+  std::vector<ObstacleSpec> obstacles;  // key obstacles
+  ArmSpec arm;                          // key arm
 };
 
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.

@@ -9,6 +9,8 @@
 //     (one DEM step)
 //     Feedback(tau + dt, wrench) what the particles did to the scoop over that step
 // where tau is the time since the pass began. A driver never throws inside the loop.
+// Output: Record(out, time) each time the loop writes a /scoop/ row, Finish(out) once when the run
+// ends (out may be null there: no file), both outside Step()'s hot path.
 #pragma once
 
 #include <memory>
@@ -19,13 +21,16 @@
 
 namespace sim {
 
+class H5Output;
+
 // What a driver knows of the bed and the scoop when a pass begins.
 struct BedContext {
   const dem::TriangleMesh* mesh = nullptr;  // the scoop, in l_scoop coordinates
-  double surface = 0;    // world z of the original free surface [m]
-  double clear_z = 0;    // world z above every particle with a margin: the scoop starts above
-                         // it when it is lowered into the bed [m]
-  double time_step = 0;  // [s]
+  double surface = 0;                       // world z of the original free surface [m]
+  double clear_z = 0;     // world z above every particle with a margin: the scoop starts above
+                          // it when it is lowered into the bed [m]
+  double time_step = 0;   // [s]
+  double start_time = 0;  // simulated time at which the dig began (pass 1's tau = 0) [s]
 };
 
 // How a pass starts.
@@ -52,6 +57,14 @@ class ScoopDriver {
   virtual bool PassOver(double tau) const = 0;
   // The planned length of pass `pass` [s], before it begins (for the progress line).
   virtual double PlannedDuration(int pass, const BedContext& bed) const = 0;
+  // The driver's own rows, written with each /scoop/ row at simulated time `time` (the arm's
+  // /arm/ datasets); may throw (the loop turns it into kOutputFailed).
+  virtual void Record(H5Output* out, double time) {
+    (void)out;
+    (void)time;
+  }
+  // The run is over: the driver's summary on stderr and, with `out`, in the file.
+  virtual void Finish(H5Output* out) { (void)out; }
 };
 
 // The study's way: the scoop follows a tool path (Tables 1 and 4, or any list of moves), turned

@@ -133,7 +133,12 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver) {
   }
   for (size_t i = 0; i < p.size(); ++i) bed_top = std::max(bed_top, p.x[i].z + p.radius[i]);
   if (out_) out_->SetAttribute("surface", surface);
-  dig.bed = {&system_->mesh(dig.mesh), surface, bed_top + 2 * r_max, scene_.time_step};
+  dig.bed = {&system_->mesh(dig.mesh), surface, bed_top + 2 * r_max, scene_.time_step,
+             system_->time()};
+  if (!scene_.obstacles.empty()) {
+    AddObstacles();
+    dig.bed.mesh = &system_->mesh(dig.mesh);  // AddMesh may have moved the meshes
+  }
   dig.body = StudyBodyFrame(spec.heading, scene_.gravity);
   dig.trench = {std::cos(spec.heading), std::sin(spec.heading), 0.0};
   for (int pass = 1; pass <= spec.passes; ++pass)
@@ -243,6 +248,23 @@ void World::RecordDigRow() {
   out_->AppendRow("/series/awake", &awake, 1);
   const double ke = system_->KineticEnergy();
   out_->AppendRow("/series/kinetic_energy", &ke, 1);
+  dig.driver->Record(out_, t);
+}
+
+void World::AddObstacles() {
+  // Fixed rigid spheres (scene `obstacles:`): a fixed mesh each, after the scoop's; the particles
+  // they overlap are taken out (the boulder was there before the bed).
+  for (const ObstacleSpec& o : scene_.obstacles) {
+    const int k = system_->AddMesh(SphereMesh(o.radius, o.material_index));
+    dem::MeshMotion fixed;
+    fixed.pose.position = o.center;
+    system_->SetMeshMotion(k, fixed);
+    obstacle_meshes_.push_back(k);
+    const std::vector<int64_t> cut = ParticlesInSphere(system_->particles(), o.center, o.radius);
+    system_->RemoveParticles(cut);
+    Status("scoopsim: obstacle: sphere r %.3g m at (%.3g, %.3g, %.3g): %zu particles removed\n",
+           o.radius, o.center.x, o.center.y, o.center.z, cut.size());
+  }
 }
 
 namespace {
@@ -337,6 +359,8 @@ WorldView World::View() const {
     view.force = dem::Norm(dig_->wrench.force_world);
     view.torque = dem::Norm(dig_->wrench.torque_world);
     view.meshes.push_back({&system_->mesh(dig_->mesh), system_->mesh_motion(dig_->mesh).pose});
+    for (int k : obstacle_meshes_)
+      view.meshes.push_back({&system_->mesh(k), system_->mesh_motion(k).pose});
   }
   return view;
 }
@@ -418,6 +442,12 @@ RunResult World::Run(const RunControl& control) {
            static_cast<double>(particle_steps_) / std::max<int64_t>(1, summary_.steps));
     Status("scoopsim: dig: %.1f s wall: %s\n", result.wall,
            PhaseBreakdown(PhasesSince(system.phase_times(), phases0), result.wall).c_str());
+    try {
+      dig_->driver->Finish(out_);  // the driver's own summary (the arm's table)
+    } catch (const std::exception& e) {
+      Status("scoopsim: output failed: %s\n", e.what());
+      result.exit_status = kExitFailure;
+    }
   }
   if (owned_out_) {
     owned_out_->SetStateHash(system.StateHash());

@@ -107,6 +107,7 @@ class World {
   void RecordDigRow();
   void BeginPass();
   void EndPass();
+  void AddObstacles();  // scene.obstacles as fixed meshes (at StartDig)
   WorldView View() const;
 
   Scene scene_;
@@ -120,6 +121,7 @@ class World {
   double next_row_ = 0;
   int64_t step0_ = 0;
   int64_t particle_steps_ = 0;  // of the awake particles (all of them without sleeping)
+  std::vector<int> obstacle_meshes_;  // mesh indices of scene.obstacles
 };
 
 }  // namespace sim

@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# The coupling's cost: the same dig with the scoop on the arm (Bullet, coupled every step) and on
+# its prescribed path (KinematicDriver), as interleaved runs (kinematic, coupled, kinematic, ...)
+# from one saved bed, so that a shared host's slow spells hit both alike. Prints each run's dig
+# wall time, the medians, their ratio (coupled / kinematic) and the coupled dig's real-time
+# factor (simulated / wall); appends one CSV row per run to bench/results/$MACHINE/arm_cost.csv.
+#
+#   bench/arm_cost.sh                              scenes/arm/nominal_snow.yaml, 5 pairs, 1 thread
+#   SCENE=scenes/fault/boulder.yaml NRUNS=3 THREADS=2 bench/arm_cost.sh
+#
+# Environment: SCENE (a scene with an arm: block), NRUNS (5), THREADS (1), BIN (build/scoopsim),
+# MACHINE (hostname).
+set -euo pipefail
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+SCENE=${SCENE:-$ROOT/scenes/arm/nominal_snow.yaml}
+NRUNS=${NRUNS:-5}
+THREADS=${THREADS:-1}
+BIN=${BIN:-$ROOT/build/scoopsim}
+MACHINE=${MACHINE:-$(hostname -s 2>/dev/null || hostname)}
+RESDIR="$ROOT/bench/results/$MACHINE"
+CSV="$RESDIR/arm_cost.csv"
+mkdir -p "$RESDIR"
+[ -s "$CSV" ] || echo "date,scene,driver,run,threads,dig_wall_s,simulated_s" >"$CSV"
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+# One bed for both; the two scenes are the scene with bed.file set, with and without its arm.
+"$BIN" bed "$SCENE" -o "$work/bed.h5" --threads "$THREADS" --quiet 2>/dev/null || [ $? -eq 4 ]
+/usr/bin/python3 - "$SCENE" "$work" <<'PY'
+import os, re, sys
+scene, work = sys.argv[1:]
+text = open(scene).read()
+folder = os.path.dirname(os.path.abspath(scene))
+# Relative file names of the scene resolved against its own folder.
+text = re.sub(r"(materials: |mesh: |urdf: )(\.\./[^\s,}]+)",
+              lambda m: m.group(1) + os.path.normpath(os.path.join(folder, m.group(2))), text)
+text = re.sub(r"\nbed:\n", "\nbed:\n  file: " + work + "/bed.h5\n", text)
+coupled = text
+if "urdf:" not in coupled:
+    coupled = coupled.replace("\narm:\n", "\narm:\n  urdf: " +
+                              os.path.normpath(os.path.join(folder, "../../assets/lander_arm.urdf")) + "\n")
+kinematic = re.sub(r"\narm:\n(  .*\n)+", "\n", text)
+open(work + "/coupled.yaml", "w").write(coupled)
+open(work + "/kinematic.yaml", "w").write(kinematic)
+PY
+
+for r in $(seq "$NRUNS"); do
+  for d in kinematic coupled; do
+    err=$("$BIN" run "$work/$d.yaml" -o "$work/$d.h5" --threads "$THREADS" --quiet 2>&1 >/dev/null)
+    wall=$(echo "$err" | sed -n 's/^scoopsim: dig: \([0-9.]*\) s wall.*/\1/p')
+    sim=$(echo "$err" | sed -n 's/^scoopsim: dig: .* steps, \([0-9.e+-]*\) s simulated.*/\1/p')
+    echo "$d run $r: dig wall $wall s, $sim s simulated"
+    echo "$(date -u +%FT%T),$(basename "$SCENE"),$d,$r,$THREADS,$wall,$sim" >>"$CSV"
+  done
+done | tee "$work/log"
+/usr/bin/python3 - "$work/log" <<'PY'
+import re, statistics, sys
+runs = {"kinematic": [], "coupled": []}
+sim = 0
+for line in open(sys.argv[1]):
+    m = re.match(r"(\w+) run \d+: dig wall ([0-9.]+) s, ([0-9.e+-]+) s simulated", line)
+    if m:
+        runs[m.group(1)].append(float(m.group(2)))
+        sim = float(m.group(3))
+k, c = statistics.median(runs["kinematic"]), statistics.median(runs["coupled"])
+print(f"kinematic median {k:.2f} s [{min(runs['kinematic']):.2f}, {max(runs['kinematic']):.2f}], "
+      f"coupled median {c:.2f} s [{min(runs['coupled']):.2f}, {max(runs['coupled']):.2f}]")
+print(f"coupled / kinematic = {c / k:.3f}; coupled real-time factor = {sim / c:.3f} "
+      f"({sim:.3g} s simulated)")
+PY

@@ -1,0 +1,301 @@
+// The arm in the loop (sim/arm_driver.cpp) on the scenes it ships with:
+// scenes/arm/nominal_snow.yaml and scenes/fault/{boulder,weak_joint_ice}.yaml. Beds are poured once
+// per bed and reused.
+//   - the nominal snow dig raises no fault, and the arm tracks the path within 2 mm;
+//   - the same path, driven by the arm and kinematically: the RMS difference of the DEM's force and
+//     torque series (1 ms means) over the kinematic run's peak is within 1.5x the noise floor of
+//     this coarse bed, measured as the same difference between the kinematic path and itself moved
+//     0.5 mm along the trench (the arm's rms tracking error is ~0.6 mm, max 1.3 mm). The issue's
+//     goal, 10% of the peak, is out of reach here: the nominal dig's wrench is 0.1-1 N, a handful
+//     of 8 mm spheres, and the 0.5 mm shift alone moves it by ~26% (ARCHITECTURE.md);
+//   - determinism: the coupled dig ends in the same DEM state hash, and the same arm figures, on 1
+//     and 2 threads and on a rerun (Bullet runs on one thread; the DEM is thread-count exact);
+//   - each fault scene raises JOINT_TORQUE_LIMIT on j_prox_pitch, one hold time (0.1 s, within one
+//     Bullet step) after its demanded torque first reaches the effort limit: the boulder once the
+//     blade is stopped by it (after ~0.55 s of push), the worn motor as the push starts (0.2 s);
+//   - a bad arm: block or URDF in a scene exits 2 with one line naming the scene, line and key.
+#include "sim/arm_driver.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sim/bed_io.h"
+#include "sim/scene.h"
+#include "sim/world.h"
+#include "tests/cli_util.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kSourceDir = SCOOPSIM_SOURCE_DIR;
+constexpr uint64_t kJointTorqueLimit = 32;
+constexpr int kProxPitch = 2;  // j_prox_pitch in the chain
+
+fs::path TempDir() {
+  static const fs::path dir = scoopsim_test::ProcessTempDir("arm_driver");
+  return dir;
+}
+
+// Forwards to a driver and keeps the DEM's wrench of every step.
+class Recorder : public sim::ScoopDriver {
+ public:
+  explicit Recorder(std::unique_ptr<sim::ScoopDriver> inner) : inner_(std::move(inner)) {}
+  sim::PassStart BeginPass(int pass, const sim::BedContext& bed) override {
+    return inner_->BeginPass(pass, bed);
+  }
+  dem::MeshMotion MotionAt(double tau) override { return inner_->MotionAt(tau); }
+  void Feedback(double tau, const dem::MeshWrench& w) override {
+    force.push_back(w.force);
+    torque.push_back(w.torque);
+    inner_->Feedback(tau, w);
+  }
+  bool PassOver(double tau) const override { return inner_->PassOver(tau); }
+  double PlannedDuration(int pass, const sim::BedContext& bed) const override {
+    return inner_->PlannedDuration(pass, bed);
+  }
+  void Finish(sim::H5Output* out) override { inner_->Finish(out); }
+  sim::ScoopDriver* inner() { return inner_.get(); }
+  std::vector<dem::Vec3> force, torque;
+
+ private:
+  std::unique_ptr<sim::ScoopDriver> inner_;
+};
+
+sim::Scene Scene(const std::string& name) { return sim::LoadScene(kSourceDir + "/scenes/" + name); }
+
+// The scene's bed, poured once (on 2 threads) and saved.
+std::string Bed(const sim::Scene& scene, const std::string& name) {
+  static std::map<std::string, std::string> beds;
+  auto found = beds.find(name);
+  if (found != beds.end()) return found->second;
+  sim::World world(scene, 2);
+  sim::SettleReport report;
+  const int status = world.Pour(true, &report);
+  EXPECT_TRUE(status == 0 || status == 4) << status;
+  const std::string path = (TempDir() / (name + ".h5")).string();
+  sim::SaveBed(path, world.system(), scene.yaml_text);
+  return beds[name] = path;
+}
+
+struct DigRun {
+  uint64_t hash = 0;
+  int exit_status = -1;
+  sim::ArmReport arm;
+  std::vector<dem::Vec3> force, torque;
+};
+
+DigRun Dig(const sim::Scene& scene, const std::string& bed, bool with_arm, int threads) {
+  sim::World world(scene, threads);
+  world.LoadBed(bed);
+  std::unique_ptr<sim::ScoopDriver> driver;
+  if (with_arm) {
+    driver = std::make_unique<sim::ArmDriver>(scene);
+  } else {
+    driver = std::make_unique<sim::KinematicDriver>(scene.dig.trajectory, scene.dig.heading,
+                                                    scene.dig.bite_depth, scene.dig.start_buried);
+  }
+  auto recorder = std::make_unique<Recorder>(std::move(driver));
+  Recorder* rec = recorder.get();
+  world.StartDig(std::move(recorder));
+  sim::RunControl control;
+  control.quiet = true;
+  DigRun run;
+  run.exit_status = world.Run(control).exit_status;
+  run.hash = world.system().StateHash();
+  if (with_arm) run.arm = static_cast<sim::ArmDriver*>(rec->inner())->report();
+  run.force = rec->force;
+  run.torque = rec->torque;
+  return run;
+}
+
+// The nominal coupled dig on 1 thread, run once and shared by the tests below.
+const DigRun& NominalArm() {
+  static const DigRun run = [] {
+    const sim::Scene scene = Scene("arm/nominal_snow.yaml");
+    return Dig(scene, Bed(scene, "snow"), true, 1);
+  }();
+  return run;
+}
+
+// RMS over windows of `window` steps of |mean(a) - mean(b)|, over the peak window |mean(b)|.
+double WindowedRmsOverPeak(const std::vector<dem::Vec3>& a, const std::vector<dem::Vec3>& b,
+                           size_t window) {
+  const size_t n = std::min(a.size(), b.size());
+  double sum2 = 0, peak = 0;
+  int windows = 0;
+  for (size_t s = 0; s + window <= n; s += window) {
+    dem::Vec3 ma, mb;
+    for (size_t i = s; i < s + window; ++i) {
+      ma = ma + a[i];
+      mb = mb + b[i];
+    }
+    ma = (1.0 / window) * ma;
+    mb = (1.0 / window) * mb;
+    sum2 += dem::Norm2(ma - mb);
+    peak = std::max(peak, dem::Norm(mb));
+    ++windows;
+  }
+  return peak > 0 ? std::sqrt(sum2 / windows) / peak : 0.0;
+}
+
+TEST(ArmDriverTest, NominalSnowDigRaisesNoFault) {
+  const DigRun& run = NominalArm();
+  ASSERT_EQ(run.exit_status, 0);
+  EXPECT_EQ(run.arm.latched, 0u);
+  EXPECT_TRUE(run.arm.events.empty());
+  EXPECT_EQ(run.arm.time_scale, 1.0);  // the scene's speeds are within the joints' limits
+  EXPECT_LT(run.arm.tracking_max, 2e-3);
+  for (size_t i = 0; i < run.arm.joints.size(); ++i)
+    EXPECT_LT(run.arm.peak_demanded[i], run.arm.effort_limit[i]) << run.arm.joints[i];
+  std::printf("nominal: tracking max %.3g mm, rms %.3g mm, angle max %.3g deg\n",
+              1e3 * run.arm.tracking_max, 1e3 * run.arm.tracking_rms,
+              run.arm.tracking_angle_max * 180 / M_PI);
+}
+
+TEST(ArmDriverTest, SamePathByArmAndKinematicallyGivesTheSameWrench) {
+  const sim::Scene scene = Scene("arm/nominal_snow.yaml");
+  const DigRun& arm = NominalArm();
+  const DigRun kin = Dig(scene, Bed(scene, "snow"), false, 1);
+  sim::Scene shifted_scene = scene;
+  shifted_scene.dig.trajectory.pivot_start.x += 0.5e-3;
+  const DigRun shifted = Dig(shifted_scene, Bed(scene, "snow"), false, 1);
+  ASSERT_EQ(kin.exit_status, 0);
+  ASSERT_EQ(arm.force.size(), kin.force.size());  // same duration, same step
+  ASSERT_EQ(shifted.force.size(), kin.force.size());
+  const size_t window = static_cast<size_t>(std::lround(1e-3 / scene.time_step));
+  const double force = WindowedRmsOverPeak(arm.force, kin.force, window);
+  const double torque = WindowedRmsOverPeak(arm.torque, kin.torque, window);
+  const double force_floor = WindowedRmsOverPeak(shifted.force, kin.force, window);
+  const double torque_floor = WindowedRmsOverPeak(shifted.torque, kin.torque, window);
+  std::printf(
+      "arm vs kinematic: force %.3g, torque %.3g of the peak; kinematic moved 0.5 mm vs "
+      "kinematic: force %.3g, torque %.3g; tracking rms %.3g mm, max %.3g mm\n",
+      force, torque, force_floor, torque_floor, 1e3 * arm.arm.tracking_rms,
+      1e3 * arm.arm.tracking_max);
+  EXPECT_LE(force, std::max(0.10, 1.5 * force_floor));
+  EXPECT_LE(torque, std::max(0.10, 1.5 * torque_floor));
+}
+
+TEST(ArmDriverTest, CoupledDigIsDeterministicOnOneAndTwoThreadsAndRerun) {
+  const sim::Scene scene = Scene("arm/nominal_snow.yaml");
+  const DigRun& one = NominalArm();
+  const DigRun two = Dig(scene, Bed(scene, "snow"), true, 2);
+  const DigRun again = Dig(scene, Bed(scene, "snow"), true, 1);
+  EXPECT_EQ(one.hash, two.hash);
+  EXPECT_EQ(one.hash, again.hash);
+  EXPECT_EQ(one.arm.peak_demanded, two.arm.peak_demanded);
+  EXPECT_EQ(one.arm.peak_demanded, again.arm.peak_demanded);
+  EXPECT_EQ(one.arm.tracking_rms, two.arm.tracking_rms);
+  EXPECT_EQ(one.force.size(), again.force.size());
+}
+
+// The first event is JOINT_TORQUE_LIMIT on j_prox_pitch, one hold time after that joint's demand
+// first reached its limit (the monitor's rule: within one sample, here one Bullet step).
+void ExpectTorqueLimitOnProxPitch(const DigRun& run, const sim::Scene& scene, double earliest,
+                                  double latest, double dig_start) {
+  ASSERT_EQ(run.exit_status, 0);
+  ASSERT_FALSE(run.arm.events.empty());
+  const sim::ArmReport::Event& e = run.arm.events.front();
+  EXPECT_EQ(e.flag, kJointTorqueLimit);
+  EXPECT_EQ(e.joint, kProxPitch);
+  EXPECT_DOUBLE_EQ(e.limit, run.arm.effort_limit[kProxPitch]);
+  const double first = run.arm.first_saturation[kProxPitch] - dig_start;
+  const double h = scene.arm.substeps * scene.time_step;
+  EXPECT_GE(e.time - dig_start - first, scene.arm.hold_time - 1e-9);
+  EXPECT_LE(e.time - dig_start - first, scene.arm.hold_time + h + 1e-9);
+  EXPECT_GE(first, earliest);
+  EXPECT_LE(first, latest);
+  std::printf(
+      "JOINT_TORQUE_LIMIT on %s: demand at the limit from %.4f s into the dig, event at "
+      "%.4f s (|demanded| %.4g N m, limit %.4g N m)\n",
+      run.arm.joints[e.joint].c_str(), first, e.time - dig_start, e.value, e.limit);
+}
+
+TEST(ArmDriverTest, BoulderRaisesJointTorqueLimit) {
+  const sim::Scene scene = Scene("fault/boulder.yaml");
+  const std::string bed = Bed(Scene("arm/nominal_snow.yaml"), "snow");  // the same bed
+  sim::World probe(scene, 1);
+  probe.LoadBed(bed);
+  const double start = probe.system().time();
+  const DigRun run = Dig(scene, bed, true, 2);
+  // The blade meets the sphere after ~0.55 s of push; the demand reaches 73 N m soon after.
+  ExpectTorqueLimitOnProxPitch(run, scene, 0.45, 0.9, start);
+  EXPECT_GT(run.arm.peak_demanded[kProxPitch], run.arm.effort_limit[kProxPitch]);
+}
+
+TEST(ArmDriverTest, WornMotorDiggingIceRaisesJointTorqueLimit) {
+  const sim::Scene scene = Scene("fault/weak_joint_ice.yaml");
+  const std::string bed = Bed(scene, "ice");
+  sim::World probe(scene, 1);
+  probe.LoadBed(bed);
+  const double start = probe.system().time();
+  const DigRun run = Dig(scene, bed, true, 2);
+  // Holding still (0-0.2 s) is within the derated limit; the push starts at 0.2 s.
+  ExpectTorqueLimitOnProxPitch(run, scene, 0.2, 0.21, start);
+  EXPECT_NEAR(run.arm.effort_limit[kProxPitch], 0.16 * 73.0, 1e-9);
+}
+
+// A scene with the nominal scene's keys and `arm` as its arm: block.
+std::string WriteArmScene(const std::string& name, const std::string& arm) {
+  std::ifstream in(kSourceDir + "/scenes/arm/nominal_snow.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = text.find("arm:\n");
+  const size_t end = text.find("sleep:", at);
+  // The default URDF is named relative to the scene's folder: name it absolutely unless the
+  // block names its own.
+  const std::string block = arm.find("urdf:") != std::string::npos
+                                ? arm
+                                : "arm:\n  urdf: " + kSourceDir + "/assets/lander_arm.urdf\n" +
+                                      arm.substr(std::string("arm:\n").size());
+  text = text.substr(0, at) + block + text.substr(end);
+  const std::string base = kSourceDir + "/scenes/arm/";
+  for (const char* rel : {"../materials.yaml", "../../assets/scoop.stl"}) {
+    const size_t p = text.find(rel);
+    text.replace(p, std::string(rel).size(), base + rel);
+  }
+  const fs::path path = TempDir() / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+// Exit 2 and one line that names `expected` (the scene file, its line, the key).
+void ExpectBadScene(const std::string& scene, const std::string& expected) {
+  const std::string err = (TempDir() / "err.txt").string();
+  EXPECT_EQ(scoopsim_test::RunScoopsim(
+                "run " + scene + " -o " + (TempDir() / "x.h5").string() + " --quiet", err),
+            2);
+  std::ifstream in(err);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find(expected), std::string::npos) << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+}
+
+TEST(ArmDriverTest, BadArmBlockExitsTwoWithOneLine) {
+  const fs::path not_xml = TempDir() / "not_xml.urdf";
+  std::ofstream(not_xml) << "this is not a robot\n";
+  const std::string a = WriteArmScene("bad_urdf.yaml", "arm:\n  urdf: " + not_xml.string() + "\n");
+  ExpectBadScene(a, "bad_urdf.yaml:");
+  ExpectBadScene(a, "arm.urdf: expected a URDF the arm builder accepts");
+  const std::string b = WriteArmScene("missing_urdf.yaml", "arm:\n  urdf: nowhere.urdf\n");
+  ExpectBadScene(b, "arm.urdf");
+  const std::string c = WriteArmScene("bad_joint.yaml", "arm:\n  derate: {j_elbow: 0.5}\n");
+  ExpectBadScene(c, "arm.derate: expected a joint of the chain");
+  const std::string d = WriteArmScene("bad_factor.yaml", "arm:\n  derate: {j_prox_pitch: 1.5}\n");
+  ExpectBadScene(d, "arm.derate.j_prox_pitch: expected a number in (0, 1]");
+  const std::string e = WriteArmScene("bad_substeps.yaml", "arm:\n  substeps: 50\n");
+  ExpectBadScene(e, "arm.substeps: expected an integer <= 2");
+  const std::string f = WriteArmScene("bad_key.yaml", "arm:\n  gain: {}\n");
+  ExpectBadScene(f, "arm.gain: expected one of the keys");
+  const std::string g = WriteArmScene("bad_reaction.yaml", "arm:\n  faults: {reaction: panic}\n");
+  ExpectBadScene(g, "arm.faults.reaction: expected continue, stop or retract, got panic");
+}
+
+}  // namespace
