@@ -6,6 +6,7 @@
 //   scoopsim render OUT.h5 --frames DIR [--video] [--color-by F] [--camera PRESET]
 //   scoopsim bench render --particles N --frames F [--threads T]
 //   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
+//   scoopsim sweep SWEEP.yaml -o DIR; scoopsim table build|query|export-csv (tools/sweep_cli.h)
 // Exit status: sim/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
 // not settled, 130 stopped by a signal).
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
@@ -27,6 +28,7 @@
 #include "sim/exit_status.h"
 #include "sim/saved_run.h"
 #include "sim/scene.h"
+#include "tools/sweep_cli.h"
 
 namespace {
 
@@ -248,6 +250,9 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 9));
 
+  tools::SweepCommands sweep_commands;  // sweep, table build / query / export-csv
+  sweep_commands.AddTo(&app);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -311,6 +316,7 @@ int Main(int argc, char** argv) {
     if (*settle) return sim::BenchSettle(bench_options);
     if (*step) return sim::BenchStep(step_options);
     if (*bench_render) return render::BenchRender(render_bench);
+    if (const int status = sweep_commands.Run(); status >= 0) return status;
   } catch (const sim::InputError& e) {
     std::fprintf(stderr, "scoopsim: %s\n", OneLine(e.what()).c_str());
     return kExitInput;
