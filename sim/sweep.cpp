@@ -172,9 +172,9 @@ struct Variable {
 // A case before its scene is made.
 struct Draft {
   std::string name;
-  YAML::Node name_node;  // where the name was given (or the first value, for a derived one)
+  int name_line = 0;  // where the name was given (or the first value, for a derived one)
   std::vector<std::pair<std::string, Choice>> settings;  // key path, value
-  std::vector<YAML::Node> key_nodes;
+  std::vector<int> key_lines;                            // of each setting's key
 };
 
 void CheckKeyPath(const std::string& file, const YAML::Node& key_node, const std::string& key) {
@@ -271,15 +271,19 @@ SweepCase MakeCase(const std::string& file, const std::string& default_base, con
     ParseKeyPath(key, &steps);
     std::string why;
     if (!SetPath(root, steps, 0, choice.value, &why)) {
-      Fail(file, draft.key_nodes[k], key, "a key path into the maps of the base scene " + base,
-           "a path that needs " + why);
+      throw InputError(file, draft.key_lines[k], key,
+                       "a key path into the maps of the base scene " + base,
+                       "a path that needs " + why);
     }
   }
   YAML::Emitter out;
   out << root;
   const std::string text = header + "\n" + out.c_str() + "\n";
   try {
-    c.scene = LoadSceneText(base, text);
+    // Named "<base>#<case>" in messages: their lines are those of the case's text (stored in its
+    // output), not the base file's; files named in it are found beside the base all the same.
+    c.scene = LoadSceneText(base + "#" + c.name, text);
+    c.scene.path = base;
   } catch (const InputError& e) {
     // About a key the case sets (or under it, or above it: an unknown key is reported at it):
     // reported at that value in the sweep file.
@@ -296,11 +300,11 @@ SweepCase MakeCase(const std::string& file, const std::string& default_base, con
                              (e.note().empty() ? "" : "; " + e.note()));
       }
     }
-    throw InputError(file, LineOf(draft.name_node), "case " + c.name,
+    throw InputError(file, draft.name_line, "case " + c.name,
                      "settings that make a valid scene of " + base, e.what());
   }
   if (!c.scene.dig.enabled) {
-    throw InputError(file, LineOf(draft.name_node), "case " + c.name,
+    throw InputError(file, draft.name_line, "case " + c.name,
                      "a scene with a dig (a sweep's table is made of the scoop's wrench)",
                      "a scene without one");
   }
@@ -354,9 +358,9 @@ Sweep LoadSweep(const std::string& path) {
         const Choice& choice = variables[k].choices[at[k]];
         d.name += (k == 0 ? "" : "_") + choice.label;
         d.settings.push_back({variables[k].key, choice});
-        d.key_nodes.push_back(variables[k].key_node);
+        d.key_lines.push_back(LineOf(variables[k].key_node));
       }
-      d.name_node = d.settings.front().second.value;
+      d.name_line = LineOf(d.settings.front().second.value);
       drafts.push_back(d);
       size_t k = variables.size();
       while (k > 0 && ++at[k - 1] == variables[k - 1].choices.size()) at[--k] = 0;
@@ -388,12 +392,12 @@ Sweep LoadSweep(const std::string& path) {
         const std::string key = it->first.as<std::string>();
         CheckKeyPath(path, it->first, key);
         d.settings.push_back({key, {LabelOf(YamlText(it->second)), it->second}});
-        d.key_nodes.push_back(it->first);
+        d.key_lines.push_back(LineOf(it->first));
         d.name += (d.name.empty() ? "" : "_") + LabelOf(YamlText(it->second));
       }
-      d.name_node = set.begin()->second;
+      d.name_line = LineOf(set.begin()->second);
       if (entry["name"]) {
-        d.name_node = entry["name"];
+        d.name_line = LineOf(entry["name"]);
         if (!entry["name"].IsScalar() || !ValidName(entry["name"].Scalar())) {
           Fail(path, entry["name"], where + ".name",
                "a name of letters, digits, '.', '_' and '-' (a file name)",
@@ -404,21 +408,22 @@ Sweep LoadSweep(const std::string& path) {
       drafts.push_back(d);
     }
   }
-  if (drafts.empty()) Fail(path, root, "grid", "a grid or a list of cases", "neither");
+  if (drafts.empty()) Fail(path, root, "grid", "a non-empty grid or list of cases", "neither");
 
   // Names: file names, unique.
   std::map<std::string, int> seen;  // name -> line
   for (const Draft& d : drafts) {
     if (!ValidName(d.name)) {
-      Fail(path, d.name_node, "case name",
+      throw InputError(path, d.name_line, "case name",
            "a name of letters, digits, '.', '_' and '-' (give the case a name, or labels to its "
            "values)",
            "'" + d.name + "'");
     }
-    const auto [where, fresh] = seen.emplace(d.name, LineOf(d.name_node));
+    const auto [where, fresh] = seen.emplace(d.name, d.name_line);
     if (!fresh) {
-      Fail(path, d.name_node, "case name", "unique case names", "a second '" + d.name + "'",
-           "first at line " + std::to_string(where->second));
+      throw InputError(path, d.name_line, "case name", "unique case names",
+                       "a second '" + d.name + "'",
+                       "first at line " + std::to_string(where->second));
     }
   }
   std::map<std::string, std::string> base_texts;
@@ -791,8 +796,11 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
       status.wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - pass0).count();
       record("running", 0, "");
       // The bed before this pass is no longer needed (the scene's own bed is not ours to remove).
-      if (pass > 1 || scene.bed.file.empty())
-        fs::remove(pass == 1 ? fs::path(first_bed) : paths.Bed(pass - 1));
+      if (pass > 1 || scene.bed.file.empty()) {
+        const fs::path used = pass == 1 ? fs::path(first_bed) : paths.Bed(pass - 1);
+        fs::remove(used);
+        fs::remove(fs::path(used).replace_extension(".xdmf"));  // its ParaView sidecar
+      }
     }
 
     MergeParts(c, paths);

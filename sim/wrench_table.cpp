@@ -316,7 +316,7 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
     std::vector<std::string> names, paths, texts;
     for (const CaseRows& c : cases) {
       names.push_back(c.name);
-      paths.push_back(c.file);
+      paths.push_back((fs::path("cases") / fs::path(c.file).filename()).string());
       texts.push_back(c.scene_yaml);
     }
     // (M x B) strings as a flat list of M * B: the case of each cell, "" for none.

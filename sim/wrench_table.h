@@ -30,7 +30,8 @@
 //                         contact in that pass
 //   /cells/rows           (M x B x P) int32: rows of the pass used (0: none)
 //   /cells/case           (M x B) strings: the case each (material, bite depth) came from
-//   /cases/name, /cases/file, /cases/scene_yaml   (C) strings: every source case and its scene
+//   /cases/name, /cases/file, /cases/scene_yaml   (C) strings: every source case, its file
+//                         (relative to the sweep folder: cases/<name>.h5) and its scene text
 #pragma once
 
 #include <array>
