@@ -672,7 +672,6 @@ bool CaseDone(const SweepCase& c, const std::string& dir) {
 
 CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& dir, int threads,
                     bool quiet) {
-  (void)sweep;
   CaseOutcome outcome;
   const auto wall0 = std::chrono::steady_clock::now();
   const auto elapsed = [&] {

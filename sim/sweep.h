@@ -34,7 +34,10 @@
 //   DIR/cases/<name>.parts/    while it runs: bed_<k>.h5, the bed after pass k (bed_0.h5 the
 //                              settled bed when the scene makes its own) and pass_<k>.h5, the rows
 //                              of pass k; removed when the case is done
+//   DIR/cases/<name>.lock      flock'ed while a process runs the case (two never run one case)
 //   DIR/table.h5               the wrench table (sim/wrench_table.h), built when every case is done
+// Test hook: SCOOPSIM_SWEEP_KILL=<case>:<pass>:<seconds> SIGKILLs the process that many simulated
+// seconds into that pass of that case.
 //
 // Each pass runs in a fresh World from the bed the previous pass left (saved, then loaded), in
 // an uninterrupted run as in a resumed one, so a resumed case's rows equal the uninterrupted
