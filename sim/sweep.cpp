@@ -210,7 +210,8 @@ Variable ReadVariable(const std::string& file, const std::string& where, const Y
     for (auto it = values.begin(); it != values.end(); ++it) {
       const std::string label = it->first.as<std::string>();
       if (!ValidName(label)) {
-        Fail(file, it->first, key, "labels of letters, digits, '.', '_' and '-'", "'" + label + "'");
+        Fail(file, it->first, key, "labels of letters, digits, '.', '_' and '-'",
+             "'" + label + "'");
       }
       v.choices.push_back({label, it->second});
     }
@@ -295,9 +296,9 @@ SweepCase MakeCase(const std::string& file, const std::string& default_base, con
                (a[b.size()] == '.' || a[b.size()] == '[');
       };
       if (!got.empty() && (got == key || under(got, key) || under(key, got))) {
-        throw InputError(file, LineOf(draft.settings[k].second.value), got, e.expected(), e.got(),
-                         "case " + c.name + " of " + base +
-                             (e.note().empty() ? "" : "; " + e.note()));
+        throw InputError(
+            file, LineOf(draft.settings[k].second.value), got, e.expected(), e.got(),
+            "case " + c.name + " of " + base + (e.note().empty() ? "" : "; " + e.note()));
       }
     }
     throw InputError(file, draft.name_line, "case " + c.name,
@@ -328,7 +329,8 @@ Sweep LoadSweep(const std::string& path) {
     throw InputError(path, e.mark.line >= 0 ? e.mark.line + 1 : 1, "syntax", "valid YAML",
                      "a syntax error: " + e.msg);
   }
-  if (!root.IsMap()) Fail(path, root, "(top level)", "a map with keys scene, grid, cases", Describe(root));
+  if (!root.IsMap())
+    Fail(path, root, "(top level)", "a map with keys scene, grid, cases", Describe(root));
   for (auto it = root.begin(); it != root.end(); ++it) {
     const std::string key = it->first.as<std::string>();
     if (key != "scene" && key != "grid" && key != "cases" && key != "notes") {
@@ -414,10 +416,11 @@ Sweep LoadSweep(const std::string& path) {
   std::map<std::string, int> seen;  // name -> line
   for (const Draft& d : drafts) {
     if (!ValidName(d.name)) {
-      throw InputError(path, d.name_line, "case name",
-           "a name of letters, digits, '.', '_' and '-' (give the case a name, or labels to its "
-           "values)",
-           "'" + d.name + "'");
+      throw InputError(
+          path, d.name_line, "case name",
+          "a name of letters, digits, '.', '_' and '-' (give the case a name, or labels to its "
+          "values)",
+          "'" + d.name + "'");
     }
     const auto [where, fresh] = seen.emplace(d.name, d.name_line);
     if (!fresh) {
@@ -463,16 +466,26 @@ CaseStatus ReadCaseStatus(const std::string& path) {
     const std::string key = line.substr(0, colon);
     const std::string value = line.substr(colon + 2);
     try {
-      if (key == "state") s.state = value;
-      else if (key == "index") s.index = std::stoi(value);
-      else if (key == "passes") s.passes = std::stoi(value);
-      else if (key == "passes_done") s.passes_done = std::stoi(value);
-      else if (key == "surface") s.surface = std::stod(value);
-      else if (key == "clear_z") s.clear_z = std::stod(value);
-      else if (key == "scene_hash") s.scene_hash = value;
-      else if (key == "exit_status") s.exit_status = std::stoi(value);
-      else if (key == "wall_s") s.wall_s = std::stod(value);
-      else if (key == "message") s.message = value;
+      if (key == "state")
+        s.state = value;
+      else if (key == "index")
+        s.index = std::stoi(value);
+      else if (key == "passes")
+        s.passes = std::stoi(value);
+      else if (key == "passes_done")
+        s.passes_done = std::stoi(value);
+      else if (key == "surface")
+        s.surface = std::stod(value);
+      else if (key == "clear_z")
+        s.clear_z = std::stod(value);
+      else if (key == "scene_hash")
+        s.scene_hash = value;
+      else if (key == "exit_status")
+        s.exit_status = std::stoi(value);
+      else if (key == "wall_s")
+        s.wall_s = std::stod(value);
+      else if (key == "message")
+        s.message = value;
     } catch (const std::exception&) {
       throw InputError(path, number, key, "a number", "'" + value + "'");
     }
@@ -553,8 +566,10 @@ void ListDatasets(const h5::Reader& r, const std::string& group, std::vector<std
     if (object < 0) r.Fail(full, "cannot be opened");
     const H5I_type_t type = H5Iget_type(object);
     H5Oclose(object);
-    if (type == H5I_GROUP) ListDatasets(r, full, out);
-    else if (type == H5I_DATASET) out->push_back(full);
+    if (type == H5I_GROUP)
+      ListDatasets(r, full, out);
+    else if (type == H5I_DATASET)
+      out->push_back(full);
   }
 }
 
@@ -587,9 +602,9 @@ void MergeParts(const SweepCase& c, const CasePaths& paths) {
         const hsize_t width = rank == 2 ? dims[1] : 1;
         std::vector<double> values(dims[0] * width);
         if (!values.empty()) {
-          h5::CheckOk(H5Dread(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
-                              values.data()),
-                      "H5Dread " + name + " in " + part);
+          h5::CheckOk(
+              H5Dread(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()),
+              "H5Dread " + name + " in " + part);
         }
         for (hsize_t row = 0; row < dims[0]; ++row)
           out.AppendRow(name, values.data() + row * width, static_cast<int>(width));
@@ -703,8 +718,8 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
     status = ReadCaseStatus(paths.status.string());
     if (!status.state.empty() && status.scene_hash != hash) {
       throw InputError(paths.status.string() + ": made from another scene text than case " +
-                       c.name + " of " + sweep.path +
-                       " now has; remove DIR/cases/" + c.name + ".* or use another output folder");
+                       c.name + " of " + sweep.path + " now has; remove DIR/cases/" + c.name +
+                       ".* or use another output folder");
     }
     if (status.state == "done" && fs::exists(paths.h5)) {
       outcome.skipped = true;
@@ -716,8 +731,8 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
       if (!fs::exists(paths.Pass(k))) done = 0;
     if (done == 0) {
       // A fresh start; a settled bed made from this very scene text is kept (saving is atomic).
-      const bool keep_bed = fs::exists(paths.Bed(0)) &&
-                            BedSceneYaml(paths.Bed(0).string()) == scene.yaml_text;
+      const bool keep_bed =
+          fs::exists(paths.Bed(0)) && BedSceneYaml(paths.Bed(0).string()) == scene.yaml_text;
       if (fs::exists(paths.parts)) {
         for (const auto& entry : fs::directory_iterator(paths.parts))
           if (!(keep_bed && entry.path() == paths.Bed(0))) fs::remove_all(entry.path());
@@ -787,12 +802,14 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
       }
       out.SetStateHash(world.system().StateHash());
       out.SetAttribute("time", world.system().time());
-      out.SetAttribute("wall_s", std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                               pass0).count());
+      out.SetAttribute(
+          "wall_s",
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - pass0).count());
       out.SetAttribute("cpu_s", CpuSeconds() - cpu0);
       out.Close();
       status.passes_done = pass;
-      status.wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - pass0).count();
+      status.wall_s +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - pass0).count();
       record("running", 0, "");
       // The bed before this pass is no longer needed (the scene's own bed is not ours to remove).
       if (pass > 1 || scene.bed.file.empty()) {
@@ -835,8 +852,9 @@ Log::Log(const Sweep& sweep) : sweep_(sweep), t0_(std::chrono::steady_clock::now
 
 void Log::Started(const SweepCase& c, int rank, int threads) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::string how =
-      threads == 0 ? "all cores" : std::to_string(threads) + (threads == 1 ? " thread" : " threads");
+  const std::string how = threads == 0
+                              ? "all cores"
+                              : std::to_string(threads) + (threads == 1 ? " thread" : " threads");
   Status("scoopsim: sweep: [%d/%zu] %s started (rank %d, %s)\n", c.index, sweep_.cases.size(),
          c.name.c_str(), rank, how.c_str());
 }
@@ -857,7 +875,8 @@ void Log::Finished(const SweepCase& c, int rank, const CaseOutcome& outcome) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
   const double left = total_ - done_cost_ - skipped_cost_;
   char eta[64] = "-";
-  if (left > 0 && done_cost_ > 0) std::snprintf(eta, sizeof eta, "%.0f s", left * elapsed / done_cost_);
+  if (left > 0 && done_cost_ > 0)
+    std::snprintf(eta, sizeof eta, "%.0f s", left * elapsed / done_cost_);
   if (left <= 0) std::snprintf(eta, sizeof eta, "0 s");
   const std::string resumed =
       outcome.first_pass > 1 ? " (resumed at pass " + std::to_string(outcome.first_pass) + ")" : "";

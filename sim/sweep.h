@@ -94,16 +94,16 @@ int RunSweep(const Sweep& sweep, const SweepOptions& options);
 
 // The status record of a case (DIR/cases/<name>.status).
 struct CaseStatus {
-  std::string state;        // "" (none), running, done, failed, stopped
-  int index = -1;           // the case's index
-  int passes = 0;           // planned
-  int passes_done = 0;      // finished and saved
-  double surface = 0;       // original surface of the dig [m] (after pass 1)
-  double clear_z = 0;       // clearance height of the dig [m] (after pass 1)
-  std::string scene_hash;   // FNV-1a 64 of the case's scene text, 16 hex digits
-  int exit_status = 0;      // of the last attempt
-  double wall_s = 0;        // wall time of the case so far, all attempts [s]
-  std::string message;      // what went wrong, if anything
+  std::string state;       // "" (none), running, done, failed, stopped
+  int index = -1;          // the case's index
+  int passes = 0;          // planned
+  int passes_done = 0;     // finished and saved
+  double surface = 0;      // original surface of the dig [m] (after pass 1)
+  double clear_z = 0;      // clearance height of the dig [m] (after pass 1)
+  std::string scene_hash;  // FNV-1a 64 of the case's scene text, 16 hex digits
+  int exit_status = 0;     // of the last attempt
+  double wall_s = 0;       // wall time of the case so far, all attempts [s]
+  std::string message;     // what went wrong, if anything
 };
 // Reads a record; state "" when there is none. Throws InputError for a malformed one.
 CaseStatus ReadCaseStatus(const std::string& path);

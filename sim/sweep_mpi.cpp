@@ -36,9 +36,8 @@ std::deque<int> Queue(const Sweep& sweep, const std::string& dir, Log* log) {
       order.push_back(c.index);
     }
   }
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    return sweep.cases[a].estimate > sweep.cases[b].estimate;
-  });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return sweep.cases[a].estimate > sweep.cases[b].estimate; });
   return {order.begin(), order.end()};
 }
 
@@ -186,8 +185,8 @@ int RunMpi(const Sweep& sweep, const SweepOptions& options) {
   int exit_status = kExitOk;
   try {
     if (rank == 0) {
-      Status("scoopsim: sweep: %zu cases on %d MPI ranks (%d thread%s each)\n",
-             sweep.cases.size(), ranks, threads, threads == 1 ? "" : "s");
+      Status("scoopsim: sweep: %zu cases on %d MPI ranks (%d thread%s each)\n", sweep.cases.size(),
+             ranks, threads, threads == 1 ? "" : "s");
       exit_status = Dispatcher(sweep, options, ranks, threads);
     } else {
       exit_status = Worker(sweep, options, rank, threads);

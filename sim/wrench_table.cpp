@@ -146,9 +146,10 @@ void WriteNd(hid_t file, const std::string& name, hid_t file_type, hid_t memory_
              const std::vector<hsize_t>& dims, const void* data) {
   h5::Handle lcpl(h5::CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
   h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1), "H5Pset_create_intermediate_group");
-  h5::Handle space(h5::CheckId(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr),
-                               "H5Screate_simple " + name),
-                   H5Sclose);
+  h5::Handle space(
+      h5::CheckId(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr),
+                  "H5Screate_simple " + name),
+      H5Sclose);
   h5::Handle d(h5::CheckId(H5Dcreate2(file, name.c_str(), file_type, space.get(), lcpl.get(),
                                       H5P_DEFAULT, H5P_DEFAULT),
                            "H5Dcreate2 " + name),
@@ -212,11 +213,13 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
   std::vector<fs::path> files;
   if (fs::is_directory(cases_dir)) {
     for (const auto& entry : fs::directory_iterator(cases_dir))
-      if (entry.is_regular_file() && entry.path().extension() == ".h5") files.push_back(entry.path());
+      if (entry.is_regular_file() && entry.path().extension() == ".h5")
+        files.push_back(entry.path());
   }
   std::sort(files.begin(), files.end());
   if (files.empty())
-    throw InputError(cases_dir.string() + ": expected the case files of a sweep (<name>.h5), found none");
+    throw InputError(cases_dir.string() +
+                     ": expected the case files of a sweep (<name>.h5), found none");
   std::vector<CaseRows> cases;
   for (const fs::path& f : files) cases.push_back(ReadCase(f));
 
@@ -242,7 +245,8 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
   const std::vector<double> depths(depth_set.begin(), depth_set.end());
   std::vector<int> passes;
   for (int p = 1; p <= max_pass; ++p) passes.push_back(p);
-  const int n_rho = static_cast<int>(std::floor(options.rho_max_mm / options.rho_step_mm + 1e-9)) + 1;
+  const int n_rho =
+      static_cast<int>(std::floor(options.rho_max_mm / options.rho_step_mm + 1e-9)) + 1;
   std::vector<double> rho(n_rho);
   for (int k = 0; k < n_rho; ++k) rho[k] = k * options.rho_step_mm / 1e3;
 
@@ -253,7 +257,8 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
   std::vector<std::string> cell_case(M * B);
   std::vector<std::string> particle_size(M);
   for (const CaseRows& c : cases) {
-    const size_t m = std::find(materials.begin(), materials.end(), c.scene.material) - materials.begin();
+    const size_t m =
+        std::find(materials.begin(), materials.end(), c.scene.material) - materials.begin();
     const size_t b = std::find(depths.begin(), depths.end(), c.scene.bite_depth) - depths.begin();
     if (!cell_case[m * B + b].empty()) {
       throw InputError(c.file + ": a second case of material " + c.scene.material +
@@ -377,11 +382,13 @@ std::array<double, 6> WrenchTable::AtRho(int m, int b, int p, double rho_mm, boo
   const double step_mm = rho_step_ * 1e3;
   const int last = static_cast<int>(rho_.size()) - 1;
   double position = rho_mm / step_mm;
-  if (std::abs(position - std::round(position)) * step_mm <= kSnapMm) position = std::round(position);
+  if (std::abs(position - std::round(position)) * step_mm <= kSnapMm)
+    position = std::round(position);
   if (position < 0 || position > last) {
     if (!clamp) {
-      throw OutOfTableDomain(path_ + ": rho " + Shortest(rho_mm) + " mm is outside the table's 0.." +
-                             Shortest(last * step_mm) + " mm (" + what + ")");
+      throw OutOfTableDomain(path_ + ": rho " + Shortest(rho_mm) +
+                             " mm is outside the table's 0.." + Shortest(last * step_mm) + " mm (" +
+                             what + ")");
     }
     position = std::clamp(position, 0.0, static_cast<double>(last));
   }
@@ -459,15 +466,16 @@ std::array<double, 6> WrenchTable::Query(const std::string& material, double bit
   const std::array<double, 6> a =
       AtRho(static_cast<int>(m), b, static_cast<int>(p), rho_mm, clamp, frame, cell_name(b));
   if (s == 0) return a;
-  const std::array<double, 6> c =
-      AtRho(static_cast<int>(m), b + 1, static_cast<int>(p), rho_mm, clamp, frame, cell_name(b + 1));
+  const std::array<double, 6> c = AtRho(static_cast<int>(m), b + 1, static_cast<int>(p), rho_mm,
+                                        clamp, frame, cell_name(b + 1));
   std::array<double, 6> v;
   for (int q = 0; q < 6; ++q) v[q] = (1 - s) * a[q] + s * c[q];
   return v;
 }
 
 void WrenchTable::ExportCsv(const std::string& csv_path) const {
-  if (fs::path(csv_path).has_parent_path()) fs::create_directories(fs::path(csv_path).parent_path());
+  if (fs::path(csv_path).has_parent_path())
+    fs::create_directories(fs::path(csv_path).parent_path());
   const std::string tmp = csv_path + ".tmp";
   {
     std::ofstream out(tmp, std::ios::trunc);

@@ -48,8 +48,8 @@ namespace sim {
 int LanderMaterialId(const std::string& name);  // 0 when it has no fixed id
 
 struct WrenchTableOptions {
-  double rho_step_mm = 1;    // grid step [mm]
-  double rho_max_mm = 450;   // grid end [mm]
+  double rho_step_mm = 1;   // grid step [mm]
+  double rho_max_mm = 450;  // grid end [mm]
 };
 
 // `scoopsim table build DIR -o TABLE.h5`: the table of every DIR/cases/*.h5 (a run's output with
@@ -94,7 +94,7 @@ class WrenchTable {
   const std::vector<double>& bite_depths() const { return bite_depths_; }  // [m]
   const std::vector<int>& passes() const { return passes_; }
   const std::vector<double>& rho() const { return rho_; }  // [m]
-  double rho_step() const { return rho_step_; }           // [m]
+  double rho_step() const { return rho_step_; }            // [m]
   // The stored sample of cell (m, b, p) at grid node r: the six components in `frame`.
   std::array<double, 6> Sample(int m, int b, int p, int r, Frame frame = Frame::kScoop) const;
   double RhoEnd(int m, int b, int p) const;  // [m]; NaN when the cell has no data
@@ -110,8 +110,8 @@ class WrenchTable {
   std::vector<int> material_ids_;
   std::vector<double> bite_depths_;  // [m]
   std::vector<int> passes_;
-  std::vector<double> rho_;  // [m]
-  double rho_step_ = 0;      // [m]
+  std::vector<double> rho_;                                                    // [m]
+  double rho_step_ = 0;                                                        // [m]
   std::vector<double> force_body_, torque_body_, force_scoop_, torque_scoop_;  // M*B*P*R*3
   std::vector<double> rho_end_;                                                // M*B*P
 };

@@ -12,8 +12,9 @@ void SweepCommands::AddTo(CLI::App* app) {
   sweep_->add_option("SWEEP", sweep_file_, "Sweep file (YAML), e.g. scenes/sweeps/tiny.yaml")
       ->required();
   sweep_->add_option("-o,--output", sweep_options_.dir, "Output folder")->capture_default_str();
-  sweep_->add_option("--case", sweep_options_.only_case,
-                     "Run only case I (0-based, the order of --list): one task of a job array")
+  sweep_
+      ->add_option("--case", sweep_options_.only_case,
+                   "Run only case I (0-based, the order of --list): one task of a job array")
       ->check(CLI::NonNegativeNumber);
   threads_ = sweep_
                  ->add_option("--threads", sweep_options_.threads,
@@ -26,8 +27,8 @@ void SweepCommands::AddTo(CLI::App* app) {
 
   CLI::App* table = app->add_subcommand("table", "The wrench lookup table");
   table->require_subcommand(1);
-  build_ = table->add_subcommand(
-      "build", "Build the table from a sweep's case files (DIR/cases/*.h5)");
+  build_ =
+      table->add_subcommand("build", "Build the table from a sweep's case files (DIR/cases/*.h5)");
   build_->add_option("DIR", build_dir_, "The sweep's output folder")->required();
   build_->add_option("-o,--output", build_output_, "Table file (HDF5)")->capture_default_str();
   build_->add_option("--rho-step-mm", build_options_.rho_step_mm, "rho grid step [mm]")
@@ -43,7 +44,8 @@ void SweepCommands::AddTo(CLI::App* app) {
   query_->add_option("--material", query_material_, "Material name, e.g. snow")->required();
   query_->add_option("--bite-depth-mm", query_bite_depth_mm_, "Bite depth [mm]")->required();
   query_->add_option("--pass", query_pass_, "Pass (1-based)")->required();
-  query_->add_option("--rho-mm", query_rho_mm_, "Distance along the trench since first contact [mm]")
+  query_
+      ->add_option("--rho-mm", query_rho_mm_, "Distance along the trench since first contact [mm]")
       ->required();
   query_->add_flag("--clamp", query_clamp_,
                    "Clamp bite depth and rho into the table's range instead of failing");
@@ -51,8 +53,8 @@ void SweepCommands::AddTo(CLI::App* app) {
       ->capture_default_str()
       ->check(CLI::IsMember({"scoop", "body"}));
 
-  export_ = table->add_subcommand(
-      "export-csv", "Write the lander simulator's CSV: m,d,p,rho,Fx,Fy,Fz,Tx,Ty,Tz");
+  export_ = table->add_subcommand("export-csv",
+                                  "Write the lander simulator's CSV: m,d,p,rho,Fx,Fy,Fz,Tx,Ty,Tz");
   export_->add_option("TABLE", export_table_, "Table file (HDF5)")->required();
   export_->add_option("-o,--output", export_output_, "CSV file")->capture_default_str();
 }

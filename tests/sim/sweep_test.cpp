@@ -6,7 +6,6 @@
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
-
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -103,8 +102,9 @@ TEST(SweepFileTest, UnknownSceneKeyPathFailsAtItsLine) {
 }
 
 TEST(SweepFileTest, EmptyGridFails) {
-  for (const char* body : {"grid: {}\n", "grid:\n  bed.material: []\n", "grid:\n  dig.bite_depth: {}\n",
-                           "notes: nothing to run\n", "cases: []\n"}) {
+  for (const char* body :
+       {"grid: {}\n", "grid:\n  bed.material: []\n", "grid:\n  dig.bite_depth: {}\n",
+        "notes: nothing to run\n", "cases: []\n"}) {
     const sim::InputError e = LoadError(body);
     EXPECT_GT(e.line(), 0) << e.what();
     EXPECT_NE(e.expected().find("non-empty"), std::string::npos) << body << ": " << e.what();
@@ -112,8 +112,8 @@ TEST(SweepFileTest, EmptyGridFails) {
 }
 
 TEST(SweepFileTest, DuplicateCaseNamesFail) {
-  const sim::InputError e =
-      LoadError("grid:\n  bed.material: [snow, ice]\ncases:\n  - {name: ice, set: {dig.passes: 1}}\n");
+  const sim::InputError e = LoadError(
+      "grid:\n  bed.material: [snow, ice]\ncases:\n  - {name: ice, set: {dig.passes: 1}}\n");
   EXPECT_EQ(e.line(), 5) << e.what();
   EXPECT_NE(std::string(e.what()).find("unique case names"), std::string::npos) << e.what();
   EXPECT_NE(e.note().find("first at line 3"), std::string::npos) << e.what();
@@ -128,9 +128,9 @@ TEST(SweepFileTest, CommandLineExitsTwo) {
   EXPECT_EQ(scoopsim_test::RunScoopsim("sweep " + sweep + " -o " + (TempDir() / "x").string(), log),
             2);
   EXPECT_NE(ReadText(log).find("cli_bad.yaml:3: bed.nope"), std::string::npos) << ReadText(log);
-  EXPECT_EQ(scoopsim_test::RunScoopsim("sweep " + kTiny + " --case 4 -o " +
-                                       (TempDir() / "x").string()),
-            2);
+  EXPECT_EQ(
+      scoopsim_test::RunScoopsim("sweep " + kTiny + " --case 4 -o " + (TempDir() / "x").string()),
+      2);
 }
 
 TEST(SweepFileTest, StatusRecordRoundTrips) {
@@ -226,15 +226,15 @@ const char* const kCases[] = {"snow_b5", "snow_b10", "ice_b5", "ice_b10"};
 TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
   const fs::path plain = TempDir() / "plain";
   const std::string log = (TempDir() / "plain.log").string();
-  ASSERT_EQ(scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + plain.string() +
-                                           " --threads 1 -q",
-                                       log),
+  ASSERT_EQ(scoopsim_test::RunScoopsim(
+                "sweep " + kTiny + " -o " + plain.string() + " --threads 1 -q", log),
             0)
       << ReadText(log);
   for (const char* name : kCases) {
     EXPECT_TRUE(fs::exists(plain / "cases" / (std::string(name) + ".h5"))) << name;
-    EXPECT_EQ(sim::ReadCaseStatus((plain / "cases" / (std::string(name) + ".status")).string()).state,
-              "done");
+    EXPECT_EQ(
+        sim::ReadCaseStatus((plain / "cases" / (std::string(name) + ".status")).string()).state,
+        "done");
     EXPECT_FALSE(fs::exists(plain / "cases" / (std::string(name) + ".parts"))) << name;
   }
   ASSERT_TRUE(fs::exists(plain / "table.h5"));
@@ -254,9 +254,8 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
 
   // A second plain run skips every case.
   const std::string again_log = (TempDir() / "again.log").string();
-  ASSERT_EQ(scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + plain.string() + " -q",
-                                       again_log),
-            0);
+  ASSERT_EQ(
+      scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + plain.string() + " -q", again_log), 0);
   EXPECT_NE(ReadText(again_log).find("[0/4] snow_b5 skipped (done)"), std::string::npos);
   EXPECT_EQ(ReadText(again_log).find("started"), std::string::npos) << ReadText(again_log);
 
@@ -265,7 +264,8 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
     const fs::path mpi = TempDir() / "mpi";
     const std::string mpi_log = (TempDir() / "mpi.log").string();
     const std::string cmd =
-        "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 " +
+        "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+        "OMPI_MCA_rmaps_base_oversubscribe=1 " +
         std::string(SCOOPSIM_MPIEXEC) + " -np 2 --oversubscribe " + SCOOPSIM_BINARY + " sweep " +
         kTiny + " -o " + mpi.string() + " -q >" + mpi_log + " 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadText(mpi_log);
@@ -323,9 +323,8 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
     EXPECT_FALSE(fs::exists(resumed / "table.h5"));
 
     const std::string resume_log = (TempDir() / "resume.log").string();
-    ASSERT_EQ(scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + resumed.string() +
-                                             " --threads 1 -q",
-                                         resume_log),
+    ASSERT_EQ(scoopsim_test::RunScoopsim(
+                  "sweep " + kTiny + " -o " + resumed.string() + " --threads 1 -q", resume_log),
               0)
         << ReadText(resume_log);
     const std::string text = ReadText(resume_log);

@@ -44,9 +44,9 @@ double Wrench(int material, double bite, int pass, int q, double rho) {
 void WriteCase(const fs::path& dir, const std::string& name, const std::string& material,
                double bite) {
   const int m = material == "snow" ? 0 : 1;
-  const std::string scene = "materials: materials.yaml\nbed: {material: " + material +
-                            ", radius: 0.008, count: 10}\ndig: {bite_depth: " +
-                            std::to_string(bite) + ", passes: 2}\n";
+  const std::string scene =
+      "materials: materials.yaml\nbed: {material: " + material +
+      ", radius: 0.008, count: 10}\ndig: {bite_depth: " + std::to_string(bite) + ", passes: 2}\n";
   sim::H5Output out((dir / "cases" / (name + ".h5")).string(), scene, "test");
   double t = 0;
   const auto row = [&](int pass, double rho, double contacts, bool junk) {
