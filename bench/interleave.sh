@@ -10,7 +10,8 @@
 #
 # Environment: BINS (required), NRUNS (5), KEY (the JSON figure: particle_steps_per_s for
 # settle, ms_per_step for step), LABEL (a word for the CSV rows), CSV (interleaved_pairs.csv),
-# MACHINE (hostname).
+# MACHINE (hostname), QUIET_WAIT (seconds, default 0: before each run, wait up to this long until
+# no compiler, test binary or other scoopsim runs on the host, as a shared host needs).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 : "${BINS:?set BINS to the binaries to compare, first = baseline}"
@@ -23,10 +24,20 @@ CSV="$RESDIR/${CSV:-interleaved_pairs.csv}"
 mkdir -p "$RESDIR"
 [ -s "$CSV" ] || echo "date,label,binary,run,key,value,state_hash" >"$CSV"
 
+QUIET_WAIT=${QUIET_WAIT:-0}
+wait_quiet() {
+  local waited=0
+  while [ "$waited" -lt "$QUIET_WAIT" ] &&
+    pgrep -f 'cc1plus|ctest|_tests|mpirun|scoopsim (run|bed|bench|sweep|study)' >/dev/null; do
+    sleep 5
+    waited=$((waited + 5))
+  done
+}
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 for r in $(seq "$NRUNS"); do
   for b in $BINS; do
+    wait_quiet
     line=$("$b" "$@")
     echo "$b $line" | tee -a "$log"
     /usr/bin/python3 - "$line" "$CSV" "$LABEL" "$b" "$r" "$KEY" <<'PY'

@@ -17,6 +17,7 @@
 //   x'' = -x^(3/2) - zeta x^(1/4) x',  x(0) = 0, x'(0) = 1,  zeta = sqrt(5) beta
 // (total normal force clamped at >= 0: non-cohesive contact) and pick beta so that the rebound
 // speed |x'(end)| equals e to 1e-9. A binary collision then has exactly the material's e.
+// Public header of the dem module.
 #pragma once
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 // Random non-overlapping insertion of spheres, with an RNG whose distribution code we own (so a
-// seed gives the same bed on every platform and library version).
+// seed gives the same bed on every platform and library version). Public header of the dem module.
 #pragma once
 
 #include <cstdint>

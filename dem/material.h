@@ -1,4 +1,5 @@
 // Particle and wall materials and the interaction parameters of each material pair.
+// Public header of the dem module.
 #pragma once
 
 #include <string>

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "dem/grow.h"
+#include "dem/internal_grow.h"
 
 namespace dem {
 

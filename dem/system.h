@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -13,7 +14,9 @@
 
 namespace dem {
 
-struct PairConstants;  // dem/contact.h
+namespace internal {
+struct Workspace;  // the step's working data (dem/internal_workspace.h, private to dem/)
+}
 
 // An infinite plane wall: particles live on the side the normal points to.
 struct Plane {
@@ -214,23 +217,9 @@ class System {
   int num_threads() const { return num_threads_; }
 
  private:
-  void Rebuild();        // reorder storage by cell, rebuild the lists, carry the history over
-  void ComputeForces();  // contacts into p_.f, p_.t (which hold gravity already)
-  void Diagnose(StepStatus* status) const;
-  void MeshForces();  // particle-mesh contacts into p_.f, p_.t and the mesh wrenches
-  void BuildMeshCandidates(int k);
-  void UpdateSleep();    // sleep/wake decisions every sleep.check_every steps
-  void RefreshActive();  // list the awake particles
-  void BuildNear();      // the pairs of the list that can touch before near_skin / 2 of motion
-  void RefreshBusy();    // list the particles the force pass visits (sleeping on)
-  void ListWallVisits();  // list the visited particles with plane candidates
-  void FlushNear() const;  // the near slots' history back into the list's (Impl::near_k)
-  struct ContactBatch;
-  // Forces of a batch of touching pairs; kOnePair: all of material pair `one`.
-  template <bool kOnePair>
-  void PairForces(ContactBatch& batch, size_t n, const PairConstants& one);
+  // Reorders storage and rebuilds the lists (internal::Rebuild, dem/neighbor_build.cpp).
+  void Rebuild();
 
-  struct Impl;
   MaterialTable materials_;
   SystemConfig config_;
   Particles p_;
@@ -242,7 +231,9 @@ class System {
   int64_t next_id_ = 0;
   int64_t builds_ = 0;
   int num_threads_ = 1;
-  Impl* impl_;
+  // Everything else the step keeps between calls; its phases are plain functions over it
+  // (dem/internal_phases.h).
+  std::unique_ptr<internal::Workspace> ws_;
 };
 
 }  // namespace dem

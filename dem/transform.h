@@ -1,6 +1,6 @@
 // Rigid transforms for the DEM: a unit quaternion (Hamilton convention, w first) and a pose.
 // A pose maps body coordinates to world coordinates: x_world = position + Rotate(orientation,
-// x_body).
+// x_body). Public header of the dem module.
 #pragma once
 
 #include <cmath>

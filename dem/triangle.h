@@ -1,6 +1,6 @@
 // Closest point of a triangle to a point, with the Voronoi region it lies in (face, one of the
 // three edges, one of the three vertices). Ericson, Real-Time Collision Detection (2005), 5.1.5:
-// the same barycentric region tests, written out for doubles.
+// the same barycentric region tests, written out for doubles. Public header of the dem module.
 #pragma once
 
 #include "dem/vec3.h"

@@ -1,5 +1,6 @@
 // Small fixed-size 3-vector for the DEM hot loops: a plain aggregate of three doubles, so arrays of
 // it are one contiguous block of x,y,z triples (24 bytes a particle per field).
+// Public header of the dem module.
 #pragma once
 
 #include <cmath>

@@ -275,7 +275,7 @@ dem::StepStatus World::Step() noexcept {
   } catch (const std::exception& e) {
     return OutputFailed(system.time(), e);
   }
-  if (Done()) return {};
+  if (dig_ && Done()) return {};  // the scene's duration bounds Run(), not a plain Step()
   if (dig_) {
     // The scoop's pose at the end of the coming step, where Step() evaluates forces.
     const double tau = system.time() + scene_.time_step - dig_->pass_t0;

@@ -102,7 +102,8 @@ class World {
   DigResume ResumePoint() const;
 
   // One step: the driver's motion for the end of the step, the DEM step, the wrench back to the
-  // driver, output rows; at a pass's end the sample is taken out and the next pass begins.
+  // driver, output rows; at a pass's end the sample is taken out and the next pass begins. After
+  // a dig's last pass it does nothing; a plain run steps past the scene's duration (bench step).
   // Never throws; reports the step's health, dem's flags and kOutputFailed (the caller decides
   // to stop).
   dem::StepStatus Step() noexcept;

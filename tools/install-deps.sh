@@ -8,6 +8,7 @@ PKGS=(
   python3 python3-numpy python3-h5py python3-matplotlib
   liggghts openmpi-bin libopenmpi-dev time python3-yaml
   libosmesa6-dev libgl-dev libpng-dev
+  libbullet-dev liburdfdom-dev libeigen3-dev
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -7,6 +7,7 @@
 //   scoopsim bench render --particles N --frames F [--threads T]
 //   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
 //   scoopsim sweep SWEEP.yaml -o DIR; scoopsim table build|query|export-csv (tools/sweep_cli.h)
+//   scoopsim arm info URDF [--gravity G]     the parsed arm and its gravity torques
 // Exit status: sim/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
 // not settled, 130 stopped by a signal).
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
@@ -20,6 +21,7 @@
 #include <string>
 #include <thread>
 
+#include "arm/arm_model.h"
 #include "render/bench.h"
 #include "render/camera.h"
 #include "render/frames.h"
@@ -28,6 +30,7 @@
 #include "sim/exit_status.h"
 #include "sim/saved_run.h"
 #include "sim/scene.h"
+#include "tools/arm_info.h"
 #include "tools/sweep_cli.h"
 
 namespace {
@@ -253,6 +256,17 @@ int Main(int argc, char** argv) {
   tools::SweepCommands sweep_commands;  // sweep, table build / query / export-csv
   sweep_commands.AddTo(&app);
 
+  CLI::App* arm_cmd = app.add_subcommand("arm", "The arm alone (its URDF), without the DEM");
+  arm_cmd->require_subcommand(1);
+  CLI::App* arm_info = arm_cmd->add_subcommand(
+      "info", "Print the parsed arm (joints, limits, masses) and gravity torques at named poses");
+  std::string arm_urdf;
+  double arm_gravity = 1.3;
+  arm_info->add_option("URDF", arm_urdf, "The arm's URDF, e.g. assets/lander_arm.urdf")->required();
+  arm_info->add_option("--gravity", arm_gravity, "Gravity [m/s^2] along -z of the base link")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -317,6 +331,13 @@ int Main(int argc, char** argv) {
     if (*step) return sim::BenchStep(step_options);
     if (*bench_render) return render::BenchRender(render_bench);
     if (const int status = sweep_commands.Run(); status >= 0) return status;
+    if (*arm_info) {
+      tools::PrintArmInfo(arm_urdf, arm_gravity, stdout);
+      return 0;
+    }
+  } catch (const arm::ArmModelError& e) {
+    std::fprintf(stderr, "scoopsim: %s\n", OneLine(e.what()).c_str());
+    return kExitInput;
   } catch (const sim::InputError& e) {
     std::fprintf(stderr, "scoopsim: %s\n", OneLine(e.what()).c_str());
     return kExitInput;

@@ -1,4 +1,5 @@
-// Growing and placing the large arrays that are made again at every neighbour-list build.
+// Private to dem/: nothing outside dem/ includes this header. Growing and placing the large
+// arrays that are made again at every neighbour-list build.
 #pragma once
 
 #include <sys/mman.h>

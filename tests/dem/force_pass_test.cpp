@@ -1,4 +1,5 @@
-// Binary collisions and sliding/rolling on a plane against closed forms.
+// The force pass (dem/force_pass.cpp) against closed forms: binary collisions (the batched
+// particle-particle kernel) and sliding/rolling on a plane (the particle-plane contacts).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,0 +1,128 @@
+// The arm as a plain description of our own: a serial chain of bodies and revolute joints from a
+// URDF's root link to a named tip link (l_scoop), with inertials, limits, damping, friction and
+// joint origins. Loaded from a URDF with urdfdom; no urdfdom type leaves arm_model.cpp.
+//
+// Bodies and links. A body is what one chain joint moves rigidly: the URDF link that is the
+// joint's child, plus every link hung on it through `fixed` joints (the grinder on l_hand, the
+// massless l_scoop_tip frame on l_scoop), merged into one inertial. bodies[0] is the fixed base
+// (the URDF root link); bodies[i] (i = 1..n) is moved by joints[i - 1]. A body's frame is the URDF
+// frame of its own link; a merged link keeps its place as a Frame of the body.
+//
+// Off-chain joints: a `revolute`, `continuous` or `prismatic` joint that is not on the path from
+// the root to the tip is held at zero and its child merged like a fixed one (it is listed in
+// ArmModel::held_joints). On the chain only `revolute` and `continuous` are supported.
+//
+// Bad input throws ArmModelError, one line: "FILE:LINE: ELEMENT: expected ..., got ..." (LINE is
+// left out where the element has none, e.g. a missing file).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace arm {
+
+// Bad URDF input (the CLI exits 2 on it).
+class ArmModelError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class JointType { kRevolute, kContinuous };
+
+const char* JointTypeName(JointType type);
+
+// Mass properties of a body.
+struct Inertial {
+  double mass = 0;                                    // [kg]
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();      // centre of mass in the body frame [m]
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  // about the CoM, body-frame axes [kg m^2]
+};
+
+// A visual or collision shape of a link (for drawing and for the DEM's moving mesh).
+struct Shape {
+  enum class Kind { kMesh, kBox, kCylinder, kSphere };
+  Kind kind = Kind::kBox;
+  std::string link;                                          // URDF link it belongs to
+  bool collision = false;                                    // <collision> (else <visual>)
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  // shape frame in the body frame
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();  // box: x y z; cylinder: radius, length, 0;
+                                                   // sphere: radius, 0, 0; mesh: scale x y z [m]
+  std::string mesh_path;  // mesh: the file name, resolved against the URDF's folder
+};
+
+// A URDF link merged into a body, and where it sits in the body frame.
+struct Frame {
+  std::string link;
+  Eigen::Isometry3d in_body = Eigen::Isometry3d::Identity();
+};
+
+struct Body {
+  std::string link;           // the URDF link whose frame is the body frame
+  Inertial inertial;          // the link and its merged links together
+  std::vector<Frame> frames;  // every link of the body, itself first (identity)
+  std::vector<Shape> shapes;  // shapes of all its links, in the body frame
+};
+
+struct Joint {
+  std::string name;
+  JointType type = JointType::kRevolute;
+  // Joint frame in the parent body's frame; at q = 0 it is the child body's frame, and at q the
+  // child frame is origin * AngleAxis(q, axis).
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit, in the joint (child) frame
+  bool has_position_limits = false;  // revolute: true; continuous: false (lower/upper ignored)
+  double lower = 0, upper = 0;       // [rad] when has_position_limits
+  double effort = 0;                 // torque limit, the motor's saturation [N m], > 0
+  double velocity = 0;               // velocity limit [rad/s], > 0
+  double damping = 0;                // viscous damping [N m s/rad], >= 0
+  double friction = 0;               // Coulomb friction [N m], >= 0
+  int line = 0;                      // line of <joint> in the URDF (0 if unknown)
+};
+
+struct ArmModel {
+  std::string source;         // the URDF's path (or the name given to ParseArmModel)
+  std::string robot_name;     // <robot name>
+  std::string tip_link;       // the chain's last link (l_scoop)
+  std::vector<Body> bodies;   // bodies[0] the fixed base; bodies[i] moved by joints[i - 1]
+  std::vector<Joint> joints;  // the chain from the base to the tip, n = dof()
+  std::vector<std::string> held_joints;  // off-chain movable joints held at zero
+
+  int dof() const { return static_cast<int>(joints.size()); }
+  // Mass of the moving bodies (the base excluded) [kg].
+  double MovingMass() const;
+  // Index of a chain joint by name, or -1.
+  int JointIndex(const std::string& name) const;
+  // Which body a URDF link belongs to and where it sits in the body frame; false if the URDF has
+  // no such link.
+  bool FindLink(const std::string& link, int* body, Eigen::Isometry3d* in_body) const;
+};
+
+// Loads a URDF file; the chain ends at `tip_link`.
+ArmModel LoadArmModel(const std::string& path, const std::string& tip_link = "l_scoop");
+// Parses URDF text. `source` names it in messages; mesh file names are resolved against
+// `base_dir` (empty: left as written).
+ArmModel ParseArmModel(const std::string& urdf_text, const std::string& source,
+                       const std::string& tip_link = "l_scoop", const std::string& base_dir = "");
+
+// Named poses of the lander's arm (joint order 1..6, shared/FACTS.md section 2), for the gravity
+// torques of `scoopsim arm info` and for tests:
+//   zero      all joints at 0: the arm stretched out (the reach-out pose)
+//   stowed    folded against the lander for flight
+//   unstowed  the lander's ready pose after unstowing
+//   digging   the lander's dig-ready pose (scoop above the ground, pointing down)
+struct NamedPose {
+  const char* name;
+  std::array<double, 6> q;  // [rad]
+};
+constexpr std::array<NamedPose, 4> kLanderPoses = {{
+    {"zero", {0, 0, 0, 0, 0, 0}},
+    {"stowed", {-1.5, 1.5708, -2.65, 2.9, 0, 0}},
+    {"unstowed", {0, 1.5707, -1.5707, 0, 1.5707, 0}},
+    {"digging", {0, 0.8537, -1.5707, 0.7171, 1.5, 0}},
+}};
+
+}  // namespace arm

@@ -1,0 +1,409 @@
+// The force pass: particle-particle contacts over the near list, in vectorised batches, and
+// particle-plane contacts, accumulated per particle in a fixed order (even slabs, then odd ones).
+// The contact law is Hertz-Mindlin with rolling friction (dem/contact.h gives the equations and
+// their sources).
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "dem/internal_phases.h"
+#include "dem/internal_workspace.h"
+
+namespace dem::internal {
+
+namespace {
+
+// Stores a vector into three structure-of-arrays columns at entry b.
+inline void Put(double* cx, double* cy, double* cz, size_t b, const Vec3& a) {
+  cx[b] = a.x;
+  cy[b] = a.y;
+  cz[b] = a.z;
+}
+
+// Hertz-Mindlin forces of a batch of particle pairs: the same law as EvaluateContact
+// (dem/contact.h: Hertz 1882 normal spring, Tsuji et al. 1992 damping, Mindlin 1949 no-slip
+// tangential spring with a Coulomb cap, constant directional rolling torque of Ai et al. 2011),
+// written without branches so that the compiler runs one contact per SIMD lane. kOnePair: every
+// contact has the material pair constants `one`; else each its own columns of the batch.
+template <bool kOnePair>
+void PairForces(ContactBatch& b, size_t nb, const PairConstants& one, double dt) {
+  ContactBatch& __restrict c = b;
+  const int n = static_cast<int>(nb);
+  // The pair constants: the one pair's, broadcast, or each contact's own column.
+  const auto pick = [](double scalar, const double* column, int e) {
+    return kOnePair ? scalar : column[e];
+  };
+#pragma omp simd
+  for (int e = 0; e < n; ++e) {
+    const double e_star = pick(one.e_star, c.e_star, e), g_star = pick(one.g_star, c.g_star, e);
+    const double damp = pick(one.damp, c.damp, e);
+    const double tangential_ratio = pick(one.tangential_ratio, c.tangential_ratio, e);
+    const double friction = pick(one.friction, c.friction, e);
+    const double rolling = pick(one.rolling_friction, c.rolling, e);
+    const double dx = c.dx[e], dy = c.dy[e], dz = c.dz[e];
+    const double ri = c.ri[e], rj = c.rj[e];
+    const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double inv_d = 1.0 / dist;
+    const double nx = dx * inv_d, ny = dy * inv_d, nz = dz * inv_d;  // from i to j
+    const double delta = ri + rj - dist;
+    const double r_star = ri * rj / (ri + rj);
+    // Contact-point velocity of j relative to i: (v_j - v_i) - (r_i w_i + r_j w_j) x n.
+    const double ax = c.ax[e], ay = c.ay[e], az = c.az[e];
+    const double vx = c.dvx[e] - (ay * nz - az * ny);
+    const double vy = c.dvy[e] - (az * nx - ax * nz);
+    const double vz = c.dvz[e] - (ax * ny - ay * nx);
+    const double vn = vx * nx + vy * ny + vz * nz;
+    const double vtx = vx - vn * nx, vty = vy - vn * ny, vtz = vz - vn * nz;
+    // Normal: Hertz spring + damping, no tension.
+    const double sq = std::sqrt(r_star * delta);
+    const double sn = 2.0 * e_star * sq;
+    const double gamma_n = damp * std::sqrt(sn / c.inv_m_star[e]);
+    const double fn = std::max(0.0, 2.0 / 3.0 * sn * delta - gamma_n * vn);
+    // Tangential history: back into the tangent plane at its old length, plus v_t dt.
+    double sx = c.sx[e], sy = c.sy[e], sz = c.sz[e];
+    const double xi_n = sx * nx + sy * ny + sz * nz;
+    sx -= xi_n * nx;
+    sy -= xi_n * ny;
+    sz -= xi_n * nz;
+    const double new2 = sx * sx + sy * sy + sz * sz;
+    const double q = new2 > 0.0 ? xi_n * xi_n / new2 : 0.0;
+    const double scale = q < 1e-4 ? 1.0 + q * (0.5 - 0.125 * q) : std::sqrt(1.0 + q);
+    sx = sx * scale + dt * vtx;
+    sy = sy * scale + dt * vty;
+    sz = sz * scale + dt * vtz;
+    // Mindlin spring + damping, Coulomb cap (the spring then carries the friction force).
+    const double st = 4.0 * g_star / e_star * sn;
+    const double gamma_t = tangential_ratio * gamma_n;
+    double ftx = st * sx + gamma_t * vtx, fty = st * sy + gamma_t * vty,
+           ftz = st * sz + gamma_t * vtz;
+    const double ft2 = ftx * ftx + fty * fty + ftz * ftz;
+    const double cap = friction * fn;
+    const bool slide = ft2 > cap * cap;
+    const double ratio = slide ? cap / std::sqrt(ft2) : 1.0;
+    ftx *= ratio;
+    fty *= ratio;
+    ftz *= ratio;
+    const double inv_st = 1.0 / st;
+    c.sx[e] = slide ? ftx * inv_st : sx;
+    c.sy[e] = slide ? fty * inv_st : sy;
+    c.sz[e] = slide ? ftz * inv_st : sz;
+    // Rolling friction against the relative rotation, limited so it cannot reverse it.
+    const double wrx = c.wx[e], wry = c.wy[e], wrz = c.wz[e];
+    const double w2 = wrx * wrx + wry * wry + wrz * wrz;
+    const double wn = std::sqrt(w2);
+    const double mr_mag = std::min(rolling * r_star * fn, wn / (dt * c.inv_inertia[e]));
+    const double mr_f = (rolling > 0.0 && w2 > 0.0) ? -mr_mag / wn : 0.0;
+    const double mrx = mr_f * wrx, mry = mr_f * wry, mrz = mr_f * wrz;
+    // Force on i and the torques on both.
+    c.fx[e] = ftx - fn * nx;
+    c.fy[e] = fty - fn * ny;
+    c.fz[e] = ftz - fn * nz;
+    const double cx = ny * ftz - nz * fty, cy = nz * ftx - nx * ftz, cz = nx * fty - ny * ftx;
+    c.tix[e] = ri * cx + mrx;
+    c.tiy[e] = ri * cy + mry;
+    c.tiz[e] = ri * cz + mrz;
+    c.tjx[e] = rj * cx - mrx;
+    c.tjy[e] = rj * cy - mry;
+    c.tjz[e] = rj * cz - mrz;
+    c.overlap[e] = delta / (2.0 * std::min(ri, rj));
+  }
+}
+
+// What the force pass reads and writes, taken once per pass (the arrays do not move during it).
+struct PassArrays {
+  Vec3* f;  // force [N] (N)
+  Vec3* t;  // torque [N m] (N)
+  const Vec3 *x, *v, *w;
+  const double *radius, *mass, *inv_mass, *inv_inertia;
+  const int32_t* mat;
+  const uint8_t* awake;
+  const int32_t* busy;  // the visited particles with sleeping (compact)
+  // The near list (Workspace::near_k): each slot's partner and history.
+  const int32_t *near_j, *near_off, *near_count;
+  Vec3* shear;
+  uint8_t* touched;
+  // Plane candidates and the visits of them.
+  const int32_t *wall_start, *wall_k, *wall_visit;
+  Vec3* wall_shear;
+  const Plane* planes;
+  const PairConstants* pair;  // material pair constants (nm x nm)
+  const PairConstants* wall;  // particle material x plane (nm x np)
+  int nm, np;
+  double dt;
+  bool compact;      // visit the busy particles only (sleeping)
+  int one_material;  // the material of every particle, or -1
+  bool alike;        // every particle alike (Alike): these sums stand for the per-particle ones
+  double alike_radius, alike_rsum, alike_inv_m_star, alike_inv_inertia;
+};
+
+// Totals of one slab.
+struct SlabTally {
+  double worst = 0;  // deepest overlap / smaller diameter
+  int64_t touching = 0, wall_touching = 0;
+};
+
+// Particle-particle forces of slab s, block of particles by block. The hot loop of the step (the
+// larger part of a dig's time, ARCHITECTURE.md): its three stages (find the touching pairs,
+// gather and evaluate them in a batch, accumulate) stay in one body of some 120 lines, as before
+// System was split, so that the compiler keeps the arrays in registers across them and no call
+// sits inside the block loop. Splitting it further was not tried.
+void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch& batch,
+                    SlabTally* tally) {
+  Vec3* __restrict f = a.f;
+  Vec3* __restrict t = a.t;
+  const Vec3* x = a.x;
+  const Vec3* v = a.v;
+  const Vec3* w = a.w;
+  const double* radius = a.radius;
+  const double* inv_mass = a.inv_mass;
+  const double* inv_inertia = a.inv_inertia;
+  const int32_t* mat = a.mat;
+  const int32_t* near_j = a.near_j;
+  const int32_t* near_off = a.near_off;
+  const int32_t* near_count = a.near_count;
+  Vec3* shear = a.shear;
+  uint8_t* touched = a.touched;
+  const int32_t* busy = a.busy;
+  const bool compact = a.compact, one_material = a.one_material >= 0, alike = a.alike;
+  const double alike_rsum = a.alike_rsum;
+  const int nm = a.nm;
+  double worst = tally->worst;
+  int64_t touching = tally->touching;
+  // Particles are visited by position in the slab (all of them), or, with sleeping, through the
+  // list of busy ones.
+  const int32_t slab_end = compact ? m.slab_busy[s + 1] : m.list.slab_start[s + 1];
+  int32_t block = compact ? m.slab_busy[s] : m.list.slab_start[s];
+  int32_t resume = 0;  // near pairs of the block's first particle already done (pieces)
+  while (block < slab_end) {
+    // 1. Find the touching pairs of a block of particles without branching on the outcome (a
+    //    contact is a coin toss for the branch predictor): write every candidate at slot nb and
+    //    advance nb only for a contact. `touching` remembers which pairs touched at the last
+    //    step; a pair that comes into contact starts with no tangential history.
+    size_t nb = 0;
+    int32_t block_end = block;
+    bool piece = false;  // the batch ends inside the near pairs of busy[block_end]
+    int32_t q_end = 0;
+    for (; block_end < slab_end; ++block_end) {
+      const int32_t i = compact ? busy[block_end] : block_end;
+      const int32_t q_begin = near_off[i] + (block_end == block ? resume : 0);
+      q_end = near_off[i] + near_count[i];
+      if (nb + static_cast<size_t>(q_end - q_begin) > ContactBatch::K) {
+        if (nb > 0) break;  // the next batch takes it
+        q_end = q_begin + ContactBatch::K;
+        piece = true;
+      }
+      const Vec3 xi = x[i];
+      const double ri = radius[i];
+      // Only the near pairs can touch (see Workspace::near_k); none joins two sleepers (the near
+      // list is made again whenever a particle wakes or falls asleep).
+      for (int32_t q = q_begin; q < q_end; ++q) {
+        const int32_t j = near_j[q];
+        const double rsum = alike ? alike_rsum : ri + radius[j];
+        const bool contact = Norm2(x[j] - xi) < rsum * rsum;
+        batch.i[nb] = i;
+        batch.j[nb] = j;
+        batch.k[nb] = q;
+        batch.was[nb] = touched[q];
+        touched[q] = contact;
+        nb += contact;
+      }
+      if (piece) break;
+    }
+    // Gather what the force law needs, one contact at a time (no branches). When all the
+    // particles are of one material (the common case), so is every pair.
+    bool uniform = true;
+    for (size_t b = 0; b < nb; ++b) {
+      const int32_t i = batch.i[b], j = batch.j[b], k = batch.k[b];
+      if (!one_material) {
+        const int32_t pair = mat[i] * nm + mat[j];
+        batch.pair[b] = pair;
+        uniform = uniform && pair == batch.pair[0];
+      }
+      const double ri = alike ? a.alike_radius : radius[i];
+      const double rj = alike ? a.alike_radius : radius[j];
+      Put(batch.dx, batch.dy, batch.dz, b, x[j] - x[i]);
+      Put(batch.dvx, batch.dvy, batch.dvz, b, v[j] - v[i]);
+      Put(batch.ax, batch.ay, batch.az, b, ri * w[i] + rj * w[j]);
+      Put(batch.wx, batch.wy, batch.wz, b, w[i] - w[j]);
+      batch.ri[b] = ri;
+      batch.rj[b] = rj;
+      batch.inv_m_star[b] = alike ? a.alike_inv_m_star : inv_mass[i] + inv_mass[j];
+      batch.inv_inertia[b] = alike ? a.alike_inv_inertia : inv_inertia[i] + inv_inertia[j];
+      Put(batch.sx, batch.sy, batch.sz, b, (batch.was[b] ? 1.0 : 0.0) * shear[k]);
+    }
+    // 2. Contact forces of the batch, one contact per SIMD lane (EvaluateContact, written
+    //    without branches), with one material pair's constants for all (the common case) or
+    //    each contact's own.
+    if (one_material) {
+      PairForces<true>(batch, nb, a.pair[a.one_material * nm + a.one_material], a.dt);
+    } else if (nb > 0 && uniform) {
+      PairForces<true>(batch, nb, a.pair[batch.pair[0]], a.dt);
+    } else {
+      for (size_t b = 0; b < nb; ++b) {
+        const PairConstants& c = a.pair[batch.pair[b]];
+        batch.e_star[b] = c.e_star;
+        batch.g_star[b] = c.g_star;
+        batch.damp[b] = c.damp;
+        batch.tangential_ratio[b] = c.tangential_ratio;
+        batch.friction[b] = c.friction;
+        batch.rolling[b] = c.rolling_friction;
+      }
+      PairForces<false>(batch, nb, a.pair[0], a.dt);
+    }
+    // 3. Accumulate in batch order (fixed by the data: deterministic).
+    for (size_t b = 0; b < nb; ++b) {
+      const int32_t i = batch.i[b], j = batch.j[b];
+      shear[batch.k[b]] = Vec3{batch.sx[b], batch.sy[b], batch.sz[b]};
+      const Vec3 fa{batch.fx[b], batch.fy[b], batch.fz[b]};
+      f[i] += fa;
+      f[j] -= fa;
+      t[i] += Vec3{batch.tix[b], batch.tiy[b], batch.tiz[b]};
+      t[j] += Vec3{batch.tjx[b], batch.tjy[b], batch.tjz[b]};
+      worst = std::max(worst, batch.overlap[b]);
+    }
+    touching += static_cast<int64_t>(nb);
+    if (piece) {  // go on with the same particle
+      const int32_t i = compact ? busy[block_end] : block_end;
+      resume = q_end - near_off[i];
+      block = block_end;
+    } else {
+      resume = 0;
+      block = block_end;
+    }
+  }
+  tally->worst = worst;
+  tally->touching = touching;
+}
+
+// Particle-plane forces of slab s, after all the slab's pairs: a later block's pairs never reach
+// back to an earlier particle (j > i), so each sum adds up in the same order as if the planes
+// came right after their particle's block. Each plane's force from the slab goes to
+// plane_force (np).
+void SlabPlaneForces(const PassArrays& a, const Workspace& m, int s, Vec3* plane_force,
+                     SlabTally* tally) {
+  const int np = a.np;
+  for (int32_t at = m.slab_wall_visit[s]; at < m.slab_wall_visit[s + 1]; ++at) {
+    const int32_t i = a.wall_visit[at];
+    if (!a.awake[i]) continue;
+    const Vec3 xi = a.x[i], vi = a.v[i], wi = a.w[i];
+    const double ri = a.radius[i], mi = a.mass[i], inv_ii = a.inv_inertia[i];
+    Vec3 fi, ti;
+    // Particle-plane contacts of i (R* = r_i, m* = m_i: the wall is rigid and fixed).
+    for (int32_t e = a.wall_start[i]; e < a.wall_start[i + 1]; ++e) {
+      const Plane& pl = a.planes[a.wall_k[e]];
+      const double delta = ri - Dot(xi - pl.point, pl.normal);
+      if (delta <= 0.0) {
+        a.wall_shear[e] = Vec3{};
+        continue;
+      }
+      const Vec3 nrm = -pl.normal;  // from the particle to the wall
+      const Vec3 v_rel = -(vi + ri * Cross(wi, nrm));
+      const ContactForce cf = EvaluateContact(a.wall[a.mat[i] * np + a.wall_k[e]], nrm, delta, ri,
+                                              mi, v_rel, wi, inv_ii, a.dt, a.wall_shear[e]);
+      const Vec3 fa = cf.ft - cf.fn * nrm;
+      fi += fa;
+      ti += ri * Cross(nrm, cf.ft) + cf.mr;
+      plane_force[a.wall_k[e]] -= fa;
+      tally->worst = std::max(tally->worst, delta / (2.0 * ri));
+      ++tally->wall_touching;
+    }
+    a.f[i] += fi;
+    a.t[i] += ti;
+  }
+}
+
+PassArrays TakeArrays(Workspace& m, Particles& p, const SystemConfig& config, int nm) {
+  PassArrays a;
+  a.f = p.f.data();
+  a.t = p.t.data();
+  a.x = p.x.data();
+  a.v = p.v.data();
+  a.w = p.w.data();
+  a.radius = p.radius.data();
+  a.mass = p.mass.data();
+  a.inv_mass = p.inv_mass.data();
+  a.inv_inertia = p.inv_inertia.data();
+  a.mat = p.material.data();
+  a.awake = p.awake.data();
+  a.busy = m.busy.data();
+  a.near_j = m.near_j.data();
+  a.near_off = m.near_off.data();
+  a.near_count = m.near_count.data();
+  a.shear = m.near_shear.data();  // the near slots hold the history (Workspace::near_k)
+  a.touched = m.near_touch.data();
+  a.wall_start = m.wall_start.data();
+  a.wall_k = m.wall_k.data();
+  a.wall_visit = m.wall_visit.data();
+  a.wall_shear = m.wall_shear.data();
+  a.planes = config.planes.data();
+  a.pair = m.pair.data();
+  a.wall = m.wall.data();
+  a.nm = nm;
+  a.np = static_cast<int>(config.planes.size());
+  a.dt = config.time_step;
+  a.compact = config.sleep.enabled;
+  a.one_material = m.particle_material;
+  a.alike = m.alike.all;  // each sum below is the one the per-particle arrays would give
+  a.alike_radius = m.alike.radius;
+  a.alike_rsum = m.alike.radius + m.alike.radius;
+  a.alike_inv_m_star = m.alike.inv_mass + m.alike.inv_mass;
+  a.alike_inv_inertia = m.alike.inv_inertia + m.alike.inv_inertia;
+  return a;
+}
+
+}  // namespace
+
+void ComputeForces(Workspace& m, Particles& p, const SystemConfig& config, int nm, int nt,
+                   PhaseTimes* times, std::vector<Vec3>* plane_force) {
+  const int nslabs = m.list.num_slabs();
+  const int np = static_cast<int>(config.planes.size());
+  m.slab_overlap.assign(nslabs, 0.0);
+  m.slab_contacts.assign(nslabs, 0);
+  m.slab_wall_contacts.assign(nslabs, 0);
+  m.slab_plane_force.assign(static_cast<size_t>(nslabs) * np, Vec3{});
+  // The lists the pass walks, made again where stale.
+  const bool compact = config.sleep.enabled;
+  const double t_near = Now();
+  if (compact && m.stale.busy) RefreshBusy(m, p, nt);
+  if (m.stale.near) BuildNear(m, p, compact, nt);
+  if (m.stale.walls) ListWallVisits(m, compact, nt);
+  const double t_pairs = Now();
+  times->near += t_pairs - t_near;
+  const PassArrays arrays = TakeArrays(m, p, config, nm);
+  if (m.batches.size() < static_cast<size_t>(nt)) m.batches.resize(nt);
+
+#pragma omp parallel num_threads(nt)
+  {
+    // Even slabs, then odd slabs (see neighbor.h for why this is race-free and deterministic).
+    for (int phase = 0; phase < 2; ++phase) {
+      const int first = phase == 0 ? 0 : m.odd_from, last = phase == 0 ? m.odd_from : nslabs;
+#pragma omp for schedule(dynamic, 1)
+      for (int at_slab = first; at_slab < last; ++at_slab) {
+        const int s = m.slab_order[at_slab];  // heaviest first (BuildNear)
+        SlabTally tally;
+        SlabPairForces(arrays, m, s, m.batches[omp_get_thread_num()], &tally);
+        SlabPlaneForces(arrays, m, s, m.slab_plane_force.data() + static_cast<size_t>(s) * np,
+                        &tally);
+        m.slab_overlap[s] = tally.worst;
+        m.slab_contacts[s] = tally.touching;
+        m.slab_wall_contacts[s] = tally.wall_touching;
+      }
+    }
+  }
+  // Reductions over slabs in slab order (independent of the thread count).
+  std::fill(plane_force->begin(), plane_force->end(), Vec3{});
+  m.contacts = m.wall_contacts = 0;
+  double worst = 0;
+  for (int s = 0; s < nslabs; ++s) {
+    for (int k = 0; k < np; ++k)
+      (*plane_force)[k] += m.slab_plane_force[static_cast<size_t>(s) * np + k];
+    m.contacts += m.slab_contacts[s];
+    m.wall_contacts += m.slab_wall_contacts[s];
+    worst = std::max(worst, m.slab_overlap[s]);
+  }
+  m.max_overlap = worst;
+  times->pairs += Now() - t_pairs;
+}
+
+}  // namespace dem::internal

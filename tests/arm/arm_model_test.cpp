@@ -1,0 +1,217 @@
+// Tests of arm/arm_model.cpp: the lander's URDF read into an ArmModel, and one line naming the
+// file, the element and the expectation for each kind of bad input.
+#include "arm/arm_model.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace arm {
+namespace {
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+const std::string& LanderUrdf() {
+  static const std::string text = ReadFile(ARM_TEST_URDF);
+  return text;
+}
+
+// Replaces the first occurrence of `from` (which must exist) in the lander's URDF.
+std::string Edited(const std::string& from, const std::string& to) {
+  std::string text = LanderUrdf();
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+// Writes `text` to a temporary .urdf and returns its path.
+std::string WriteTemp(const std::string& name, const std::string& text) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("scoopsim_arm_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / name).string();
+  std::ofstream(path) << text;
+  return path;
+}
+
+// 1-based line of the first line containing `needle`.
+int LineContaining(const std::string& text, const std::string& needle) {
+  std::istringstream in(text);
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    if (line.find(needle) != std::string::npos) return n;
+  }
+  return 0;
+}
+
+// Loads `text` from a temporary file NAME and expects ArmModelError's one line to be
+// "PATH:LINE: " + message, LINE the first line of `text` containing `line_of`; with
+// whole = false the message need only start so (the rest carries computed numbers).
+void ExpectLoadError(const std::string& name, const std::string& text, const std::string& line_of,
+                     const std::string& message, bool whole = true) {
+  const std::string path = WriteTemp(name, text);
+  std::string got;
+  try {
+    LoadArmModel(path);
+  } catch (const ArmModelError& e) {
+    got = e.what();
+  }
+  const std::string expected =
+      path + ":" + std::to_string(LineContaining(text, line_of)) + ": " + message;
+  if (whole) {
+    EXPECT_EQ(got, expected);
+  } else {
+    EXPECT_EQ(got.rfind(expected, 0), 0u) << got;
+  }
+}
+
+TEST(ArmModelTest, ReadsTheLanderArm) {
+  const ArmModel m = LoadArmModel(ARM_TEST_URDF);
+  ASSERT_EQ(m.dof(), 6);
+  const char* names[] = {"j_shou_yaw",   "j_shou_pitch", "j_prox_pitch",
+                         "j_dist_pitch", "j_hand_yaw",   "j_scoop_yaw"};
+  const double effort[] = {70.9, 101.0, 73.0, 25.7, 25.7, 20.0};
+  const double friction[] = {2.6, 4.6, 2.7, 0.3, 0.3, 0.5};
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_EQ(m.joints[i].name, names[i]);
+    EXPECT_EQ(m.joints[i].type, i < 2 ? JointType::kRevolute : JointType::kContinuous);
+    EXPECT_EQ(m.joints[i].has_position_limits, i < 2);
+    EXPECT_DOUBLE_EQ(m.joints[i].effort, effort[i]);
+    EXPECT_DOUBLE_EQ(m.joints[i].damping, 50);
+    EXPECT_DOUBLE_EQ(m.joints[i].friction, friction[i]);
+    EXPECT_GT(m.joints[i].line, 0);
+  }
+  EXPECT_DOUBLE_EQ(m.joints[0].lower, -1.56);
+  EXPECT_DOUBLE_EQ(m.joints[1].upper, 2.2);
+  EXPECT_DOUBLE_EQ(m.joints[0].velocity, 0.15);
+  EXPECT_EQ(m.bodies[6].link, "l_scoop");
+  // The grinder (0.5 kg) is merged into l_hand; l_scoop_tip is a massless frame of l_scoop.
+  EXPECT_NEAR(m.bodies[5].inertial.mass, 6.56759 + 0.5, 1e-12);
+  int body = -1;
+  Eigen::Isometry3d tip;
+  ASSERT_TRUE(m.FindLink("l_scoop_tip", &body, &tip));
+  EXPECT_EQ(body, 6);
+  EXPECT_LT((tip.translation() - Eigen::Vector3d(0.1, 0, 0.08)).norm(), 1e-15);
+  EXPECT_NEAR(m.bodies[6].inertial.mass, 0.30936, 1e-15);
+  // Moving mass: the seven link masses and the grinder.
+  EXPECT_NEAR(m.MovingMass(), 7.0292 + 3.98552 + 7.67831 + 4.20589 + 6.56759 + 0.5 + 0.30936,
+              1e-12);
+  // The scoop's mesh, resolved next to the URDF.
+  bool mesh = false;
+  for (const Shape& s : m.bodies[6].shapes) {
+    if (s.kind == Shape::Kind::kMesh && s.collision) {
+      mesh = true;
+      EXPECT_TRUE(std::filesystem::exists(s.mesh_path)) << s.mesh_path;
+      EXPECT_EQ(std::filesystem::path(s.mesh_path).filename(), "scoop.stl");
+    }
+  }
+  EXPECT_TRUE(mesh);
+}
+
+TEST(ArmModelTest, MissingFileNamesThePath) {
+  try {
+    LoadArmModel("/nonexistent/arm.urdf");
+    FAIL();
+  } catch (const ArmModelError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "/nonexistent/arm.urdf: URDF file: expected a readable file, got No such file or "
+              "directory");
+  }
+}
+
+TEST(ArmModelTest, NotXml) {
+  const std::string path = WriteTemp("not_xml.urdf", "solid scoop\n  facet normal 0 0 1\n");
+  try {
+    LoadArmModel(path);
+    FAIL();
+  } catch (const ArmModelError& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(
+        msg.rfind(path + ": <robot>: expected a URDF (XML with one <robot> element), got: ", 0), 0u)
+        << msg;
+  }
+}
+
+TEST(ArmModelTest, LinkWithoutInertialOnTheChain) {
+  const std::string inertial =
+      "    <inertial>\n      <origin xyz=\"0.16225 0 -0.10446\" rpy=\"0 0 0\"/>\n"
+      "      <mass value=\"3.98552\"/>\n      <inertia ixx=\"0.010948\" ixy=\"0\" "
+      "ixz=\"-0.016432\" iyy=\"0.140544\" iyz=\"0\" izz=\"0.141292\"/>\n    </inertial>\n";
+  ExpectLoadError("no_inertial.urdf", Edited(inertial, ""), "<link name=\"l_prox\">",
+                  "link 'l_prox': expected an <inertial> on every link a chain joint moves "
+                  "(base_link -> l_scoop), got none");
+}
+
+TEST(ArmModelTest, UnsupportedJointType) {
+  ExpectLoadError("prismatic.urdf",
+                  Edited("name=\"j_prox_pitch\" type=\"continuous\"",
+                         "name=\"j_prox_pitch\" type=\"prismatic\""),
+                  "name=\"j_prox_pitch\"",
+                  "joint 'j_prox_pitch' type: expected revolute, continuous or fixed on the chain "
+                  "base_link -> l_scoop, got prismatic");
+}
+
+TEST(ArmModelTest, NoScoopLink) {
+  std::string text = LanderUrdf();
+  for (size_t at; (at = text.find("\"l_scoop\"")) != std::string::npos;) {
+    text.replace(at, 9, "\"l_bucket\"");
+  }
+  ExpectLoadError("no_scoop.urdf", text, "<robot name=",
+                  "<robot name=\"lander_arm\">: expected a link named 'l_scoop' (the scoop, the "
+                  "chain's tip), got none");
+}
+
+TEST(ArmModelTest, NegativeMass) {
+  ExpectLoadError(
+      "negative_mass.urdf", Edited("<mass value=\"7.67831\"/>", "<mass value=\"-7.67831\"/>"),
+      "<link name=\"l_dist\">", "link 'l_dist' <mass>: expected a mass > 0 kg, got -7.67831");
+}
+
+TEST(ArmModelTest, InertiaNotPositiveDefinite) {
+  ExpectLoadError("bad_inertia.urdf", Edited("ixx=\"0.013575\"", "ixx=\"-0.013575\""),
+                  "<link name=\"l_wrist\">",
+                  "link 'l_wrist' <inertia>: expected a positive-definite inertia, got principal "
+                  "moments ",
+                  false);
+}
+
+TEST(ArmModelTest, InertiaBreakingTheTriangleInequality) {
+  // Izz > Ixx + Iyy: no real body has it.
+  ExpectLoadError("triangle.urdf", Edited("izz=\"0.021682\"", "izz=\"0.08\""),
+                  "<link name=\"l_hand\">",
+                  "link 'l_hand' <inertia>: expected principal moments obeying the triangle "
+                  "inequality (I1 + I2 >= I3), got ",
+                  false);
+}
+
+TEST(ArmModelTest, EffortLimitNotPositive) {
+  // j_hand_yaw's limit (j_dist_pitch's reads the same): the one before <link name="l_hand">.
+  const std::string text = Edited(
+      "effort=\"25.7\" velocity=\"0.2\"/>\n    <dynamics damping=\"50\" "
+      "friction=\"0.3\"/>\n  </joint>\n\n  <link name=\"l_hand\">",
+      "effort=\"0\" velocity=\"0.2\"/>\n    <dynamics damping=\"50\" "
+      "friction=\"0.3\"/>\n  </joint>\n\n  <link name=\"l_hand\">");
+  ExpectLoadError("effort.urdf", text, "name=\"j_hand_yaw\"",
+                  "joint 'j_hand_yaw' <limit>: expected effort (the torque limit) > 0 N m, got 0");
+}
+
+TEST(ArmModelTest, NegativeDamping) {
+  ExpectLoadError("damping.urdf",
+                  Edited("damping=\"50\" friction=\"2.6\"", "damping=\"-1\" friction=\"2.6\""),
+                  "name=\"j_shou_yaw\"",
+                  "joint 'j_shou_yaw' <dynamics>: expected damping >= 0 and friction >= 0, got "
+                  "damping -1 friction 2.6");
+}
+
+}  // namespace
+}  // namespace arm
