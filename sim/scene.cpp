@@ -1037,9 +1037,15 @@ void LoadMaterials(const std::string& path, dem::MaterialTable* table) {
 }
 
 Scene LoadScene(const std::string& path) {
+  std::string text;
+  if (!ReadFile(path, &text)) throw InputError(path + ": cannot open scene file");
+  return LoadSceneText(path, text);
+}
+
+Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
   Scene scene;
   scene.path = path;
-  if (!ReadFile(path, &scene.yaml_text)) throw InputError(path + ": cannot open scene file");
+  scene.yaml_text = yaml_text;
   const YAML::Node root = Parse(path, scene.yaml_text);
   if (root.IsNull()) Fail(path, 1, "(top level)", "a map of scene keys", "an empty file");
   const MapReader top(path, root, "",

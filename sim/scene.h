@@ -205,6 +205,9 @@ struct Scene {
 
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.
 Scene LoadScene(const std::string& path);
+// The same for a scene text that is not (or not yet) a file, such as a sweep's case: `path`
+// names it in messages and files named in it are relative to its folder.
+Scene LoadSceneText(const std::string& path, const std::string& yaml_text);
 
 // The built-in clump templates' names (dem::TetrahedronTemplates), in order.
 std::vector<std::string> BuiltinClumpNames();

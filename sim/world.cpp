@@ -104,7 +104,7 @@ void World::UseOutput(H5Output* out) {
   out_ = out;
 }
 
-void World::StartDig(std::unique_ptr<ScoopDriver> driver) {
+void World::StartDig(std::unique_ptr<ScoopDriver> driver, const DigResume* resume) {
   const DigSpec& spec = scene_.dig;
   dig_ = std::make_unique<Dig>();
   Dig& dig = *dig_;
@@ -123,6 +123,7 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver) {
 
   // Original surface: given, or the mean column top of the bed's central part (the columns next
   // to the walls are lower or higher by wall effects).
+  // A resumed dig keeps those of its first pass.
   const dem::Particles& p = system_->particles();
   const double r_max = scene_.bed.radius_max;
   double surface = spec.surface;
@@ -132,16 +133,21 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver) {
     surface = BedSurface(p, scene_.box_min + margin, scene_.box_max - margin, 4 * r_max);
   }
   for (size_t i = 0; i < p.size(); ++i) bed_top = std::max(bed_top, p.x[i].z + p.radius[i]);
+  double clear_z = bed_top + 2 * r_max;
+  const int first_pass = resume ? resume->first_pass : 1;
+  if (resume) {
+    surface = resume->surface;
+    clear_z = resume->clear_z;
+  }
   if (out_) out_->SetAttribute("surface", surface);
-  dig.bed = {&system_->mesh(dig.mesh), surface, bed_top + 2 * r_max, scene_.time_step,
-             system_->time()};
+  dig.bed = {&system_->mesh(dig.mesh), surface, clear_z, scene_.time_step, system_->time()};
   if (!scene_.obstacles.empty()) {
     AddObstacles();
     dig.bed.mesh = &system_->mesh(dig.mesh);  // AddMesh may have moved the meshes
   }
   dig.body = StudyBodyFrame(spec.heading, scene_.gravity);
   dig.trench = {std::cos(spec.heading), std::sin(spec.heading), 0.0};
-  for (int pass = 1; pass <= spec.passes; ++pass)
+  for (int pass = first_pass; pass <= spec.passes; ++pass)
     dig.planned += dig.driver->PlannedDuration(pass, dig.bed);
 
   system_->set_sleep(scene_.sleep);
@@ -151,8 +157,12 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver) {
   step0_ = system_->step_count();
   particle_steps_ = 0;
   started_ = true;
-  dig.pass = 1;
-  BeginPass();
+  dig.pass = first_pass;
+  if (!Done()) BeginPass();
+}
+
+DigResume World::ResumePoint() const {
+  return {dig_->pass, dig_->bed.surface, dig_->bed.clear_z};
 }
 
 void World::BeginPass() {
@@ -340,9 +350,16 @@ void World::Record() {
   if (out_ && scene_.output.snapshot_every > 0 && steps % scene_.output.snapshot_every == 0)
     out_->WriteSnapshot(system.time(), system.particles());
   // A pass ends when its driver says so; the next one begins at once.
-  while (dig_ && !Done() && dig_->driver->PassOver(system.time() - dig_->pass_t0)) {
+  // RunControl::on_pass_end sees the bed between the two.
+  while (dig_ && halted_after_pass_ == 0 && !Done() &&
+         dig_->driver->PassOver(system.time() - dig_->pass_t0)) {
     EndPass();
-    if (++dig_->pass <= scene_.dig.passes) BeginPass();
+    const int ended = dig_->pass++;
+    if (control_ && control_->on_pass_end && !control_->on_pass_end(ended)) {
+      halted_after_pass_ = ended;
+      break;
+    }
+    if (dig_->pass <= scene_.dig.passes) BeginPass();
   }
 }
 
@@ -397,6 +414,11 @@ RunResult World::Run(const RunControl& control) {
   maybe_frame();
 
   RunResult result;
+  control_ = &control;
+  if (halted_after_pass_ > 0) {  // an earlier Run() stopped between passes: go on
+    halted_after_pass_ = 0;
+    if (!Done()) BeginPass();
+  }
   while (!Done()) {
     const dem::StepStatus status = Step();
     if (status.flags & kOutputFailed) {
@@ -410,6 +432,10 @@ RunResult World::Run(const RunControl& control) {
       break;
     }
     maybe_frame();
+    if (halted_after_pass_ > 0) {
+      result.stopped_at_pass = halted_after_pass_;
+      break;
+    }
     const int64_t steps = system.step_count() - step0_;
     if (steps % 64 == 0) {
       if (out_) out_->MaybeFlush();
@@ -427,6 +453,7 @@ RunResult World::Run(const RunControl& control) {
       break;
     }
   }
+  control_ = nullptr;
   progress.Finish(system.time() - t_start_, particle_steps_, Done());
   result.wall = Seconds(std::chrono::steady_clock::now() - wall0);
   if (dig_) {

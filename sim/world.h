@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -50,11 +51,27 @@ struct RunControl {
   double stop_after = 0;     // stop after this much simulated time [s] (0: run to the end)
   FrameCallback on_frame;    // frames at the start and then every frame_every seconds
   double frame_every = 0;    // [s]; 0 = output.interval (plain run), 0.05 s (dig)
+  // Called by the loop thread when dig pass `pass` has ended and its sample has been taken out,
+  // before the next pass begins (a sweep saves the bed there, to resume from). Return false to
+  // stop the run at that point (RunResult::stopped_at_pass). It may throw: the run then stops as
+  // for an output failure (exit status 1, the message printed).
+  std::function<bool(int pass)> on_pass_end;
+};
+
+// Where a dig starts when it does not start at its first pass: a dig resumed from the bed that
+// pass first_pass - 1 left (a sweep's case restarted after a stop). The original surface and
+// the clearance height are those the first pass measured (World::ResumePoint()), so every pass
+// cuts where it would have in one uninterrupted run.
+struct DigResume {
+  int first_pass = 1;  // 1-based
+  double surface = 0;  // world z of the original free surface [m]
+  double clear_z = 0;  // world z the scoop is lowered from (BedContext::clear_z) [m]
 };
 
 struct RunResult {
   int exit_status = 0;         // sim::ExitStatus
   bool stopped_after = false;  // RunControl::stop_after ended it
+  int stopped_at_pass = 0;     // RunControl::on_pass_end returned false after this pass
   double wall = 0;             // [s]
 };
 
@@ -76,9 +93,13 @@ class World {
   void UseOutput(H5Output* out);
   H5Output* output() { return out_; }
 
-  // Adds the scene's scoop mesh and starts its first pass under `driver`. Without it, Step()
+  // Adds the scene's scoop mesh and starts its first pass under `driver` (or pass
+  // resume->first_pass, with the original surface and clearance given). Without it, Step()
   // advances the particles alone (scene.sleep applies either way).
-  void StartDig(std::unique_ptr<ScoopDriver> driver);
+  void StartDig(std::unique_ptr<ScoopDriver> driver, const DigResume* resume = nullptr);
+  // The pass the dig is at (the next one, between passes) and the surface and clearance of its
+  // first pass: what StartDig needs to resume from a bed saved now. Only during a dig.
+  DigResume ResumePoint() const;
 
   // One step: the driver's motion for the end of the step, the DEM step, the wrench back to the
   // driver, output rows; at a pass's end the sample is taken out and the next pass begins. After
@@ -121,7 +142,9 @@ class World {
   double next_row_ = 0;
   int64_t step0_ = 0;
   int64_t particle_steps_ = 0;  // of the awake particles (all of them without sleeping)
-  std::vector<int> obstacle_meshes_;  // mesh indices of scene.obstacles
+  std::vector<int> obstacle_meshes_;      // mesh indices of scene.obstacles
+  const RunControl* control_ = nullptr;  // during Run(): its on_pass_end
+  int halted_after_pass_ = 0;            // on_pass_end returned false after this pass
 };
 
 }  // namespace sim

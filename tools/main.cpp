@@ -6,6 +6,7 @@
 //   scoopsim render OUT.h5 --frames DIR [--video] [--color-by F] [--camera PRESET]
 //   scoopsim bench render --particles N --frames F [--threads T]
 //   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
+//   scoopsim sweep SWEEP.yaml -o DIR; scoopsim table build|query|export-csv (tools/sweep_cli.h)
 //   scoopsim arm info URDF [--gravity G]     the parsed arm and its gravity torques
 // Exit status: sim/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
 // not settled, 130 stopped by a signal).
@@ -30,6 +31,7 @@
 #include "sim/saved_run.h"
 #include "sim/scene.h"
 #include "tools/arm_info.h"
+#include "tools/sweep_cli.h"
 
 namespace {
 
@@ -251,6 +253,9 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 9));
 
+  tools::SweepCommands sweep_commands;  // sweep, table build / query / export-csv
+  sweep_commands.AddTo(&app);
+
   CLI::App* arm_cmd = app.add_subcommand("arm", "The arm alone (its URDF), without the DEM");
   arm_cmd->require_subcommand(1);
   CLI::App* arm_info = arm_cmd->add_subcommand(
@@ -325,6 +330,7 @@ int Main(int argc, char** argv) {
     if (*settle) return sim::BenchSettle(bench_options);
     if (*step) return sim::BenchStep(step_options);
     if (*bench_render) return render::BenchRender(render_bench);
+    if (const int status = sweep_commands.Run(); status >= 0) return status;
     if (*arm_info) {
       tools::PrintArmInfo(arm_urdf, arm_gravity, stdout);
       return 0;

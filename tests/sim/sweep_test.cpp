@@ -1,0 +1,340 @@
+// Sweeps (sim/sweep.cpp): the sweep file (cases from a grid and a list, errors at load with the
+// line and key), status records, and end to end on scenes/sweeps/tiny.yaml (four cases, two
+// passes each): a plain run, a two-rank `mpirun` run, `--case I` and a run SIGKILLed mid-case
+// then resumed all give the same table and case rows, bit for bit.
+#include "sim/sweep.h"
+
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "sim/saved_run.h"
+#include "tests/cli_util.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kSourceDir = SCOOPSIM_SOURCE_DIR;
+const std::string kTiny = kSourceDir + "/scenes/sweeps/tiny.yaml";
+
+fs::path TempDir() {
+  static const fs::path dir = scoopsim_test::ProcessTempDir("sweep");
+  return dir;
+}
+
+std::string ReadText(const fs::path& path) {
+  std::stringstream s;
+  s << std::ifstream(path).rdbuf();
+  return s.str();
+}
+
+// A sweep file in the temporary folder over scenes/sweeps/tiny_scene.yaml.
+std::string WriteSweep(const std::string& name, const std::string& body) {
+  const fs::path path = TempDir() / name;
+  std::ofstream(path) << "scene: " << kSourceDir << "/scenes/sweeps/tiny_scene.yaml\n" << body;
+  return path.string();
+}
+
+// The InputError LoadSweep throws for `body`.
+sim::InputError LoadError(const std::string& body) {
+  try {
+    sim::LoadSweep(WriteSweep("bad.yaml", body));
+  } catch (const sim::InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no error for:\n" << body;
+  return sim::InputError("none");
+}
+
+TEST(SweepFileTest, GridThenListInOrder) {
+  const sim::Sweep sweep = sim::LoadSweep(WriteSweep("ok.yaml", R"(grid:
+  bed.material: [snow, ice]
+  dig.bite_depth: {b5: 0.005, b10: 0.01}
+cases:
+  - {name: deep, set: {dig.bite_depth: 0.012, dig.passes: 1}}
+  - set: {dig.trajectory.linear.distance: 0.03}
+)"));
+  ASSERT_EQ(sweep.cases.size(), 6u);
+  const char* names[] = {"snow_b5", "snow_b10", "ice_b5", "ice_b10", "deep", "0.03"};
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_EQ(sweep.cases[i].name, names[i]);
+    EXPECT_EQ(sweep.cases[i].index, i);
+    EXPECT_GT(sweep.cases[i].estimate, 0);
+  }
+  EXPECT_EQ(sweep.cases[2].scene.bed.material, "ice");
+  EXPECT_EQ(sweep.cases[2].scene.dig.bite_depth, 0.005);
+  EXPECT_EQ(sweep.cases[4].scene.dig.passes, 1);
+  EXPECT_EQ(sweep.cases[4].scene.dig.bite_depth, 0.012);
+  EXPECT_EQ(sweep.cases[5].scene.dig.trajectory.moves[2].amount, 0.03);
+  // The case's scene text is the edited base scene, loadable as it stands.
+  const sim::Scene again =
+      sim::LoadSceneText(sweep.cases[3].scene.path, sweep.cases[3].scene.yaml_text);
+  EXPECT_EQ(again.bed.material, "ice");
+  EXPECT_EQ(again.dig.bite_depth, 0.01);
+}
+
+TEST(SweepFileTest, UnknownSceneKeyPathFailsAtItsLine) {
+  const sim::InputError e = LoadError("grid:\n  bed.material: [snow]\n  bed.radiuss: [0.01]\n");
+  EXPECT_EQ(e.line(), 4) << e.what();  // line 1 is the scene key WriteSweep adds
+  EXPECT_EQ(e.key(), "bed.radiuss");
+  EXPECT_NE(e.expected().find("one of the keys"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("bad.yaml:4: bed.radiuss"), std::string::npos) << e.what();
+  // A path through a value that is not a map, and a malformed path.
+  const sim::InputError through = LoadError("grid:\n  bed.material.x: [snow]\n");
+  EXPECT_EQ(through.line(), 3) << through.what();
+  const sim::InputError malformed = LoadError("grid:\n  bed..material: [snow]\n");
+  EXPECT_EQ(malformed.line(), 3) << malformed.what();
+  // A bad value is reported at the value.
+  const sim::InputError value = LoadError("grid:\n  dig.bite_depth:\n    - 0.01\n    - -2\n");
+  EXPECT_EQ(value.line(), 5) << value.what();
+  EXPECT_EQ(value.key(), "dig.bite_depth");
+}
+
+TEST(SweepFileTest, EmptyGridFails) {
+  for (const char* body :
+       {"grid: {}\n", "grid:\n  bed.material: []\n", "grid:\n  dig.bite_depth: {}\n",
+        "notes: nothing to run\n", "cases: []\n"}) {
+    const sim::InputError e = LoadError(body);
+    EXPECT_GT(e.line(), 0) << e.what();
+    EXPECT_NE(e.expected().find("non-empty"), std::string::npos) << body << ": " << e.what();
+  }
+}
+
+TEST(SweepFileTest, DuplicateCaseNamesFail) {
+  const sim::InputError e = LoadError(
+      "grid:\n  bed.material: [snow, ice]\ncases:\n  - {name: ice, set: {dig.passes: 1}}\n");
+  EXPECT_EQ(e.line(), 5) << e.what();
+  EXPECT_NE(std::string(e.what()).find("unique case names"), std::string::npos) << e.what();
+  EXPECT_NE(e.note().find("first at line 3"), std::string::npos) << e.what();
+  const sim::InputError labels = LoadError("grid:\n  dig.bite_depth: {a: 0.01, a: 0.02}\n");
+  EXPECT_GT(labels.line(), 0) << labels.what();
+}
+
+// Bad sweep files exit 2 with one line naming the file and line.
+TEST(SweepFileTest, CommandLineExitsTwo) {
+  const std::string sweep = WriteSweep("cli_bad.yaml", "grid:\n  bed.nope: [1]\n");
+  const std::string log = (TempDir() / "cli_bad.log").string();
+  EXPECT_EQ(scoopsim_test::RunScoopsim("sweep " + sweep + " -o " + (TempDir() / "x").string(), log),
+            2);
+  EXPECT_NE(ReadText(log).find("cli_bad.yaml:3: bed.nope"), std::string::npos) << ReadText(log);
+  EXPECT_EQ(
+      scoopsim_test::RunScoopsim("sweep " + kTiny + " --case 4 -o " + (TempDir() / "x").string()),
+      2);
+}
+
+TEST(SweepFileTest, StatusRecordRoundTrips) {
+  sim::CaseStatus s;
+  s.state = "running";
+  s.index = 3;
+  s.passes = 5;
+  s.passes_done = 2;
+  s.surface = 0.1 + 1e-17 * 3;  // any double
+  s.clear_z = 1.0 / 3.0;
+  s.scene_hash = sim::TextHash("scene");
+  s.message = "pass 3";
+  const std::string path = (TempDir() / "x.status").string();
+  sim::WriteCaseStatus(path, s);
+  const sim::CaseStatus r = sim::ReadCaseStatus(path);
+  EXPECT_EQ(r.state, s.state);
+  EXPECT_EQ(r.index, 3);
+  EXPECT_EQ(r.passes_done, 2);
+  EXPECT_EQ(r.surface, s.surface);
+  EXPECT_EQ(r.clear_z, s.clear_z);
+  EXPECT_EQ(r.scene_hash, s.scene_hash);
+  EXPECT_EQ(r.message, "pass 3");
+  EXPECT_EQ(sim::ReadCaseStatus((TempDir() / "none.status").string()).state, "");
+}
+
+// ---- End to end
+
+// Every dataset of an HDF5 file as bytes (numbers in their native type, strings as text), by
+// name; datasets under `skip` left out.
+herr_t Visit(hid_t object, const char* name, const H5O_info_t* info, void* data) {
+  if (info->type != H5O_TYPE_DATASET) return 0;
+  auto& out = *static_cast<std::map<std::string, std::string>*>(data);
+  const hid_t d = H5Dopen2(object, name, H5P_DEFAULT);
+  const hid_t type = H5Dget_type(d);
+  const hid_t space = H5Dget_space(d);
+  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  std::string bytes;
+  if (H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) > 0) {
+    const hid_t memory = H5Tcopy(type);
+    std::vector<char*> strings(static_cast<size_t>(n));
+    H5Dread(d, memory, H5S_ALL, H5S_ALL, H5P_DEFAULT, strings.data());
+    for (char* s : strings) bytes += std::string(s ? s : "") + '\0';
+    H5Dvlen_reclaim(memory, space, H5P_DEFAULT, strings.data());
+    H5Tclose(memory);
+  } else {
+    const hid_t native = H5Tget_native_type(type, H5T_DIR_ASCEND);
+    bytes.resize(static_cast<size_t>(n) * H5Tget_size(native));
+    H5Dread(d, native, H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data());
+    H5Tclose(native);
+  }
+  out[name] = bytes;
+  H5Sclose(space);
+  H5Tclose(type);
+  H5Dclose(d);
+  return 0;
+}
+
+std::map<std::string, std::string> Datasets(const fs::path& path, const std::string& skip = "") {
+  std::map<std::string, std::string> out;
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  EXPECT_GE(f, 0) << path;
+  if (f < 0) return out;
+  H5Ovisit2(f, H5_INDEX_NAME, H5_ITER_INC, Visit, &out, H5O_INFO_BASIC);
+  H5Fclose(f);
+  if (!skip.empty()) {
+    for (auto it = out.begin(); it != out.end();)
+      it = it->first.rfind(skip, 0) == 0 ? out.erase(it) : std::next(it);
+  }
+  return out;
+}
+
+// Same datasets, same bytes; failures name the dataset.
+void ExpectSameData(const fs::path& a, const fs::path& b, const std::string& skip = "") {
+  const auto x = Datasets(a, skip);
+  const auto y = Datasets(b, skip);
+  EXPECT_GT(x.size(), 5u) << a;
+  ASSERT_EQ(x.size(), y.size()) << a << " vs " << b;
+  for (const auto& [name, bytes] : x) {
+    ASSERT_TRUE(y.count(name)) << name << " missing in " << b;
+    EXPECT_TRUE(y.at(name) == bytes) << name << " differs: " << a << " vs " << b;
+  }
+}
+
+std::string RootString(const fs::path& path, const std::string& name) {
+  return sim::SavedRun(path.string()).RootAttribute(name);
+}
+
+const char* const kCases[] = {"snow_b5", "snow_b10", "ice_b5", "ice_b10"};
+
+// One test, so that the plain sweep (the reference) runs once: ctest runs every test of this
+// file in a process of its own. Cases run on one thread (the DEM gives the same bits on any
+// count); the MPI ranks get one each.
+TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
+  const fs::path plain = TempDir() / "plain";
+  const std::string log = (TempDir() / "plain.log").string();
+  ASSERT_EQ(scoopsim_test::RunScoopsim(
+                "sweep " + kTiny + " -o " + plain.string() + " --threads 1 -q", log),
+            0)
+      << ReadText(log);
+  for (const char* name : kCases) {
+    EXPECT_TRUE(fs::exists(plain / "cases" / (std::string(name) + ".h5"))) << name;
+    EXPECT_EQ(
+        sim::ReadCaseStatus((plain / "cases" / (std::string(name) + ".status")).string()).state,
+        "done");
+    EXPECT_FALSE(fs::exists(plain / "cases" / (std::string(name) + ".parts"))) << name;
+  }
+  ASSERT_TRUE(fs::exists(plain / "table.h5"));
+  // One line per case start and end, with the wall time and the ETA.
+  const std::string text = ReadText(log);
+  EXPECT_NE(text.find("[3/4] ice_b10 started"), std::string::npos) << text;
+  EXPECT_NE(text.find("of 4 finished, ETA"), std::string::npos) << text;
+  // A case's file is a run's output with two passes, its scene the edited base scene.
+  const sim::SavedRun run((plain / "cases" / "ice_b5.h5").string());
+  const std::string scene = run.SceneYaml();
+  EXPECT_NE(scene.find("material: ice"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("bite_depth: 0.005"), std::string::npos) << scene;
+  const sim::ScoopSeries scoop = run.Scoop();
+  ASSERT_FALSE(scoop.empty());
+  EXPECT_EQ(scoop.pass.front(), 1);
+  EXPECT_EQ(scoop.pass.back(), 2);
+
+  // A second plain run skips every case.
+  const std::string again_log = (TempDir() / "again.log").string();
+  ASSERT_EQ(
+      scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + plain.string() + " -q", again_log), 0);
+  EXPECT_NE(ReadText(again_log).find("[0/4] snow_b5 skipped (done)"), std::string::npos);
+  EXPECT_EQ(ReadText(again_log).find("started"), std::string::npos) << ReadText(again_log);
+
+  {
+    SCOPED_TRACE("mpirun -np 2");
+    const fs::path mpi = TempDir() / "mpi";
+    const std::string mpi_log = (TempDir() / "mpi.log").string();
+    const std::string cmd =
+        "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+        "OMPI_MCA_rmaps_base_oversubscribe=1 " +
+        std::string(SCOOPSIM_MPIEXEC) + " -np 2 --oversubscribe " + SCOOPSIM_BINARY + " sweep " +
+        kTiny + " -o " + mpi.string() + " -q >" + mpi_log + " 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadText(mpi_log);
+    const std::string mpi_text = ReadText(mpi_log);
+    EXPECT_NE(mpi_text.find("on 2 MPI ranks"), std::string::npos) << mpi_text;
+    EXPECT_NE(mpi_text.find("(rank 1)"), std::string::npos) << mpi_text;
+    ExpectSameData(plain / "table.h5", mpi / "table.h5");
+    for (const char* name : kCases) {
+      const fs::path file = fs::path("cases") / (std::string(name) + ".h5");
+      ExpectSameData(plain / file, mpi / file, "sweep");  // /sweep/: wall and CPU times
+      EXPECT_EQ(RootString(plain / file, "state_hash"), RootString(mpi / file, "state_hash"));
+    }
+  }
+  {
+    SCOPED_TRACE("--case 2");
+    const fs::path one = TempDir() / "one";
+    ASSERT_EQ(scoopsim_test::RunScoopsim("sweep " + kTiny + " --case 2 -o " + one.string() +
+                                         " --threads 1 -q"),
+              0);
+    std::vector<std::string> files;
+    for (const auto& entry : fs::directory_iterator(one / "cases"))
+      files.push_back(entry.path().filename().string());
+    std::sort(files.begin(), files.end());
+    EXPECT_EQ(files, (std::vector<std::string>{"ice_b5.h5", "ice_b5.lock", "ice_b5.status"}));
+    EXPECT_FALSE(fs::exists(one / "table.h5"));
+    ExpectSameData(plain / "cases" / "ice_b5.h5", one / "cases" / "ice_b5.h5", "sweep");
+  }
+  {
+    SCOPED_TRACE("killed and resumed");
+    // Three cases done already (copied), then the sweep is SIGKILLed 0.3 s into snow_b10's
+    // second pass, then resumed.
+    const fs::path resumed = TempDir() / "resumed";
+    fs::create_directories(resumed / "cases");
+    for (const char* name : {"snow_b5", "ice_b5", "ice_b10"}) {
+      for (const char* ext : {".h5", ".status"}) {
+        fs::copy_file(plain / "cases" / (std::string(name) + ext),
+                      resumed / "cases" / (std::string(name) + ext));
+      }
+    }
+    const std::string killed_log = (TempDir() / "killed.log").string();
+    const std::string kill = "SCOOPSIM_SWEEP_KILL=snow_b10:2:0.3 " + std::string(SCOOPSIM_BINARY) +
+                             " sweep " + kTiny + " -o " + resumed.string() + " --threads 1 -q 2>" +
+                             killed_log;
+    const int killed = std::system(kill.c_str());
+    EXPECT_TRUE(WIFSIGNALED(killed) || (WIFEXITED(killed) && WEXITSTATUS(killed) == 128 + SIGKILL))
+        << killed << ": " << ReadText(killed_log);
+    const sim::CaseStatus status =
+        sim::ReadCaseStatus((resumed / "cases" / "snow_b10.status").string());
+    EXPECT_EQ(status.state, "running");
+    EXPECT_EQ(status.passes_done, 1);
+    const fs::path parts = resumed / "cases" / "snow_b10.parts";
+    EXPECT_TRUE(fs::exists(parts / "bed_1.h5"));
+    // The killed pass's file is still a readable HDF5 file (SWMR).
+    EXPECT_NO_THROW(sim::SavedRun((parts / "pass_2.h5").string()).SceneYaml());
+    EXPECT_FALSE(fs::exists(resumed / "table.h5"));
+
+    const std::string resume_log = (TempDir() / "resume.log").string();
+    ASSERT_EQ(scoopsim_test::RunScoopsim(
+                  "sweep " + kTiny + " -o " + resumed.string() + " --threads 1 -q", resume_log),
+              0)
+        << ReadText(resume_log);
+    const std::string text = ReadText(resume_log);
+    for (const char* done : {"snow_b5 skipped", "ice_b5 skipped", "ice_b10 skipped"})
+      EXPECT_NE(text.find(done), std::string::npos) << text;
+    EXPECT_NE(text.find("(resumed at pass 2)"), std::string::npos) << text;
+    EXPECT_EQ(text.find("pass 1:"), std::string::npos) << text;  // pass 1 was not run again
+    ExpectSameData(plain / "table.h5", resumed / "table.h5");
+    ExpectSameData(plain / "cases" / "snow_b10.h5", resumed / "cases" / "snow_b10.h5", "sweep");
+  }
+}
+
+}  // namespace
