@@ -279,7 +279,7 @@ int BenchStep(const BenchStepOptions& options) {
   const Scene scene = LoadScene(options.scene);
   if (scene.bed.file.empty()) throw InputError(options.scene + ": bed.file: expected a saved bed");
   World world(scene, options.threads);
-  world.LoadBed(scene.bed.file);
+  world.LoadState(scene.bed.file);
   const dem::System* system = &world.system();
   auto run = [&](int64_t steps, int64_t* awake_sum) {
     for (int64_t k = 0; k < steps; ++k) {

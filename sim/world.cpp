@@ -58,6 +58,13 @@ void World::LoadBed(const std::string& path) {
   system_->Canonicalize();
 }
 
+void World::LoadState(const std::string& path) {
+  sim::LoadBed(path, system_.get());
+  system_->set_sleep(scene_.sleep);
+  system_->Canonicalize();
+  sleep_applied_ = true;
+}
+
 int World::Pour(bool quiet, SettleReport* report) {
   Progress progress("bed", scene_.bed.settle_max_time, quiet);
   const double t0 = system_->time();
@@ -384,7 +391,7 @@ WorldView World::View() const {
 
 void World::StartPlain() {
   started_ = true;
-  system_->set_sleep(scene_.sleep);
+  if (!sleep_applied_) system_->set_sleep(scene_.sleep);
   t_start_ = next_row_ = system_->time();
   step0_ = system_->step_count();
   particle_steps_ = 0;

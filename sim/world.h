@@ -86,6 +86,9 @@ class World {
   // The bed: a saved one (storage canonicalised), or poured and settled now with a progress line
   // (returns kExitOk, kExitNotSettled with the bed kept, kExitUnstable or kExitStopped).
   void LoadBed(const std::string& path);
+  // A saved mid-run state (bench step): loaded, the scene's sleep settings applied to its sleep
+  // flags, then the storage made canonical, so a plain run continues it with no further rebuild.
+  void LoadState(const std::string& path);
   int Pour(bool quiet, SettleReport* report);
 
   // Outputs: a file of its own (created now), or a shared one (a study's groups).
@@ -137,7 +140,8 @@ class World {
   H5Output* out_ = nullptr;
   std::unique_ptr<Dig> dig_;
   DigSummary summary_;
-  bool started_ = false;  // a dig or a plain run has begun
+  bool started_ = false;        // a dig or a plain run has begun
+  bool sleep_applied_ = false;  // the scene's sleep settings are in force (LoadState)
   double t_start_ = 0;    // time at which it began (after the bed) [s]
   double next_row_ = 0;
   int64_t step0_ = 0;
