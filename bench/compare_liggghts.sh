@@ -9,7 +9,8 @@
 # Each pair: `bench/liggghts/run_bench.sh` (one run, on scoopsim's cached bed converted) and
 # `scoopsim bench settle` (the same bed, steps and thread count). Prints one line per pair and the
 # medians; writes them to bench/results/$MACHINE/interleaved_<UTC date>.txt.
-# Needs: build/scoopsim, liggghts, mpirun (openmpi-bin), /usr/bin/time, /usr/bin/python3 + h5py.
+# Needs: build/scoopsim, liggghts and /usr/bin/time (bench/install-peers.sh), mpirun
+# (openmpi-bin), /usr/bin/python3 + h5py.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 PAIRS=${PAIRS:-6}

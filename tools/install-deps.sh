@@ -6,7 +6,7 @@ PKGS=(
   libyaml-cpp-dev libcli11-dev libhdf5-dev zlib1g-dev libassimp-dev
   libgtest-dev googletest
   python3 python3-numpy python3-h5py python3-matplotlib
-  liggghts openmpi-bin libopenmpi-dev time python3-yaml
+  openmpi-bin libopenmpi-dev
   libosmesa6-dev libgl-dev libpng-dev
   libbullet-dev liburdfdom-dev libeigen3-dev
 )
