@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs what the peer benchmarks need beyond scoopsim's own packages (tools/install-deps.sh):
-# LIGGGHTS 3.8 for bench/liggghts/ and bench/compare_liggghts.sh, and GNU time for their memory
-# figures. Not needed to build, test or run scoopsim. Idempotent; runs as root or through sudo.
+# LIGGGHTS 3.8 for bench/liggghts/ and bench/compare_liggghts.sh, GNU time for their memory
+# figures and python3-yaml for h5_to_liggghts.py. Not needed to build, test or run scoopsim.
+# Idempotent; runs as root or through sudo.
 set -euo pipefail
-PKGS=(liggghts time)
+PKGS=(liggghts time python3-yaml)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
