@@ -5,12 +5,13 @@
 # time. Prints the worst and the median relative error and the final percent.
 #
 #   bench/eta_check.sh run scenes/quick_dig.yaml -o out/quick_dig.h5
+#   KEEP=/tmp/x bench/eta_check.sh ...     # also keeps /tmp/x.tty and /tmp/x.timing
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BIN=${BIN:-$ROOT/build/scoopsim}
 tty_log=$(mktemp)
 timing=$(mktemp)
-trap 'rm -f "$tty_log" "$timing"' EXIT
+trap '[ -n "${KEEP:-}" ] && cp "$tty_log" "$KEEP.tty" && cp "$timing" "$KEEP.timing"; rm -f "$tty_log" "$timing"' EXIT
 script -q -e -T "$timing" -c "$(printf '%q ' "$BIN" "$@")" "$tty_log" >/dev/null
 /usr/bin/python3 - "$tty_log" "$timing" <<'PY'
 import re, statistics, sys
@@ -31,7 +32,7 @@ def time_at(pos):
         t = c
     return t
 text = raw.decode(errors="replace").replace("\x1b[K", "")
-pat = re.compile(r"^(\w+)\s+([\d.]+)%.*elapsed ([\d:]+)\s+ETA ([\d:-]+)")
+pat = re.compile(r"^(\w+)\s+([\d.]+)%.*elapsed ([\d:]+)\s+ETA (?:<= )?([\d:-]+)")
 def secs(c):
     if "-" in c: return None
     s = 0

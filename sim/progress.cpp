@@ -39,13 +39,13 @@ std::string Clock(double seconds) {
 
 // "label  42.0%  t 0.021/0.05 s  elapsed 0:12  ETA 0:17  3.21 M particle-steps/s"
 std::string Line(const std::string& label, double fraction, double total_time, double sim_time,
-                 int64_t particle_steps, double elapsed, double eta) {
+                 int64_t particle_steps, double elapsed, double eta, bool upper_bound = false) {
   const double rate = elapsed > 0 ? static_cast<double>(particle_steps) / elapsed / 1e6 : 0.0;
   char buffer[256];
   std::snprintf(buffer, sizeof buffer,
-                "%s %5.1f%%  t %.4g/%.4g s  elapsed %s  ETA %s  %.3g M particle-steps/s",
+                "%s %5.1f%%  t %.4g/%.4g s  elapsed %s  ETA %s%s  %.3g M particle-steps/s",
                 label.c_str(), 100.0 * fraction, sim_time, total_time, Clock(elapsed).c_str(),
-                Clock(eta).c_str(), rate);
+                upper_bound && std::isfinite(eta) ? "<= " : "", Clock(eta).c_str(), rate);
   return buffer;
 }
 
@@ -93,11 +93,16 @@ void Progress::Update(double sim_time, int64_t particle_steps) {
                                 [](double e, const Sample& s) { return e < s.elapsed; });
   if (first != samples_.begin()) --first;
   const double d_sim = sim_time - first->sim_time, d_wall = elapsed - first->elapsed;
-  eta_ = d_sim > 0 && d_wall > 0 ? left * d_wall / d_sim : std::nan("");
+  // The mean of two estimates: at the recent rate (it follows a change of cost, late) and at the
+  // whole run's rate (steady, but blind to a change). On scenes/sleep_check.yaml's dig, whose cost
+  // per simulated second varies 1.5x, the mean errs least (bench/eta_check.sh).
+  const double recent = d_sim > 0 && d_wall > 0 ? left * d_wall / d_sim : std::nan("");
+  const double overall = sim_time > 0 ? left * elapsed / sim_time : std::nan("");
+  eta_ = std::isfinite(recent) ? 0.5 * (recent + overall) : overall;
   const double fraction =
       total_time_ > 0 ? std::min(1.0, std::max(0.0, sim_time / total_time_)) : 0.0;
   const std::string line =
-      Line(label_, fraction, total_time_, sim_time, particle_steps, elapsed, eta_);
+      Line(label_, fraction, total_time_, sim_time, particle_steps, elapsed, eta_, open_ended_);
   if (tty_) {
     std::fprintf(stderr, "\r%s\x1b[K", line.c_str());  // ESC[K clears the rest of the old line
     g_live_line = true;

@@ -1,9 +1,10 @@
 // Progress of a long run on stderr: a live line (percent, simulated time, ETA, particle-steps/s)
 // when stderr is a terminal, a plain log line otherwise (the first after about a second, then
 // every `log_period` seconds). Status lines go through Status(), which never glues onto a live
-// line. The ETA divides the simulated time left by the simulated rate over the recent past
-// (the last quarter of the elapsed time, at least 2 s): a dig's cost per simulated second
-// changes as the scoop enters the bed, so the run's average rate would mislead.
+// line. The ETA is the mean of the simulated time left at the rate of the recent past (the last
+// quarter of the elapsed time, at least 2 s) and at the whole run's rate: a dig's cost per
+// simulated second changes as the scoop enters and leaves the bed, which the recent rate follows
+// late and the whole run's rate not at all.
 #pragma once
 
 #include <chrono>
@@ -24,6 +25,10 @@ class Progress {
   // Final line (newline on a terminal); `done`: the run reached its end (shown as 100%).
   void Finish(double sim_time, int64_t particle_steps, bool done = true);
 
+  // The run may end before total_time (a pour ends once the bed has settled): the ETA is then
+  // an upper bound and shown as "ETA <= m:ss".
+  void set_open_ended(bool open_ended) { open_ended_ = open_ended; }
+
   // Estimated wall seconds left at the last Update (NaN when unknown), for tests and logs.
   double eta() const { return eta_; }
 
@@ -37,6 +42,7 @@ class Progress {
   bool tty_;
   double log_period_;
   bool printed_ = false;
+  bool open_ended_ = false;
   double eta_;
   std::vector<Sample> samples_;  // (elapsed, sim_time) about every 0.1 s, for the recent rate
   std::chrono::steady_clock::time_point start_, last_print_;

@@ -67,6 +67,7 @@ void World::LoadState(const std::string& path) {
 
 int World::Pour(bool quiet, SettleReport* report) {
   Progress progress("bed", scene_.bed.settle_max_time, quiet);
+  progress.set_open_ended(true);  // settling ends when the bed is at rest, often well before
   const double t0 = system_->time();
   auto particle_steps = [&] {
     return system_->step_count() * static_cast<int64_t>(system_->particles().size());
