@@ -20,13 +20,6 @@
 namespace sim {
 namespace {
 
-// The scene's dig, driven along its tool path.
-std::unique_ptr<ScoopDriver> KinematicDig(const Scene& scene) {
-  const DigSpec& dig = scene.dig;
-  return std::make_unique<KinematicDriver>(dig.trajectory, dig.heading, dig.bite_depth,
-                                           dig.start_buried);
-}
-
 RunControl Control(const RunOptions& options) {
   RunControl control;
   control.quiet = options.quiet;
@@ -83,7 +76,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   // The scoop on the arm (Bullet, coupled every step) when the scene has an arm, else on its path.
   if (scene.dig.enabled)
     world.StartDig(scene.arm.enabled ? std::unique_ptr<ScoopDriver>(new ArmDriver(scene))
-                                     : KinematicDig(scene));
+                                     : KinematicDriver::ForDig(scene.dig));
   const RunResult result = world.Run(Control(options));
   if (options.dig_summary) *options.dig_summary = world.dig_summary();
   return result.exit_status;
@@ -160,7 +153,7 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
     const auto dig0 = std::chrono::steady_clock::now();
     const double cpu0 = CpuSeconds();
     world.UseOutput(&out);
-    world.StartDig(KinematicDig(s));
+    world.StartDig(KinematicDriver::ForDig(s.dig));
     RunControl control;
     control.quiet = options.quiet;
     status = world.Run(control).exit_status;

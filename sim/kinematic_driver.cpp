@@ -34,6 +34,18 @@ KinematicDriver::KinematicDriver(const TrajectorySpec& path, double heading, dou
       start_buried_(start_buried),
       approach_speed_(ApproachSpeed(reference_.spec())) {}
 
+std::unique_ptr<KinematicDriver> KinematicDriver::ForDig(const DigSpec& dig) {
+  return std::make_unique<KinematicDriver>(dig.trajectory, dig.heading, dig.bite_depth,
+                                           dig.start_buried);
+}
+
+dem::Pose KinematicDriver::Place(const ScoopKinematics& k, const dem::Vec3& extra) const {
+  dem::Pose p;
+  p.position = origin_shift_ + dem::Rotate(heading_, k.pose.position - origin_shift_) + extra;
+  p.orientation = heading_ * k.pose.orientation;
+  return p;
+}
+
 KinematicDriver::Plan KinematicDriver::PlanPass(int pass, const BedContext& bed) const {
   // Where the pass goes: the level scoop's lowest point at pass * bite below the surface, once
   // the path's leading translations (the approach) are done.
@@ -43,14 +55,7 @@ KinematicDriver::Plan KinematicDriver::PlanPass(int pass, const BedContext& bed)
   spec.pivot_start.z -= reference_.LeadingDrop();
   Plan plan{Trajectory(spec)};
   if (!start_buried_) {
-    const dem::Pose first = [&] {
-      const ScoopKinematics k = plan.trajectory.At(plan.trajectory.start_time());
-      dem::Pose p;
-      p.position = origin_shift_ + dem::Rotate(heading_, k.pose.position - origin_shift_) +
-                   dem::Vec3{};
-      p.orientation = heading_ * k.pose.orientation;
-      return p;
-    }();
+    const dem::Pose first = Place(plan.trajectory.At(plan.trajectory.start_time()), {});
     plan.lift = std::max(0.0, bed.clear_z - LowestZ(*bed.mesh, first));
     plan.descent_speed = approach_speed_;
     plan.descent_time = plan.lift / approach_speed_;
@@ -87,9 +92,7 @@ dem::MeshMotion KinematicDriver::MotionAt(double tau) {
   }
   // Heading: rotate the whole path about the vertical through its start.
   dem::MeshMotion m;
-  m.pose.position =
-      origin_shift_ + dem::Rotate(heading_, k.pose.position - origin_shift_) + extra;
-  m.pose.orientation = heading_ * k.pose.orientation;
+  m.pose = Place(k, extra);
   m.velocity = dem::Rotate(heading_, k.velocity);
   m.angular_velocity = dem::Rotate(heading_, k.angular_velocity);
   return m;

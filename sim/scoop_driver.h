@@ -17,6 +17,7 @@
 
 #include "dem/mesh.h"
 #include "dem/system.h"
+#include "sim/scene.h"
 #include "sim/trajectory.h"
 
 namespace sim {
@@ -77,6 +78,8 @@ class KinematicDriver : public ScoopDriver {
   // `path`: the dig's trajectory (pivot_start.z is set per pass); heading [rad] about world z;
   // bite_depth [m]; start_buried: see PassStart.
   KinematicDriver(const TrajectorySpec& path, double heading, double bite_depth, bool start_buried);
+  // The driver of a scene's dig block (its trajectory, heading, bite depth and start_buried).
+  static std::unique_ptr<KinematicDriver> ForDig(const DigSpec& dig);
 
   PassStart BeginPass(int pass, const BedContext& bed) override;
   dem::MeshMotion MotionAt(double tau) override;
@@ -95,6 +98,9 @@ class KinematicDriver : public ScoopDriver {
     }
   };
   Plan PlanPass(int pass, const BedContext& bed) const;
+  // The pose of a path state turned by the heading about the vertical through the path's start,
+  // then shifted by `extra` (the descent) [m].
+  dem::Pose Place(const ScoopKinematics& k, const dem::Vec3& extra) const;
 
   TrajectorySpec path_;
   Trajectory reference_;  // the path as given (validated once)

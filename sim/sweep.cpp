@@ -667,12 +667,6 @@ class CaseLock {
   bool locked_ = false;
 };
 
-std::unique_ptr<ScoopDriver> KinematicDig(const Scene& scene) {
-  const DigSpec& dig = scene.dig;
-  return std::make_unique<KinematicDriver>(dig.trajectory, dig.heading, dig.bite_depth,
-                                           dig.start_buried);
-}
-
 }  // namespace
 
 bool CaseDone(const SweepCase& c, const std::string& dir) {
@@ -776,7 +770,7 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
                    scene.output.flush_seconds);
       world.UseOutput(&out);
       const DigResume resume{pass, status.surface, status.clear_z};
-      world.StartDig(KinematicDig(scene), pass > 1 ? &resume : nullptr);
+      world.StartDig(KinematicDriver::ForDig(scene.dig), pass > 1 ? &resume : nullptr);
       RunControl control;
       control.quiet = quiet;
       control.stop_after = KillAfter(c, pass);

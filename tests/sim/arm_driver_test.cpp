@@ -99,8 +99,7 @@ DigRun Dig(const sim::Scene& scene, const std::string& bed, bool with_arm, int t
   if (with_arm) {
     driver = std::make_unique<sim::ArmDriver>(scene);
   } else {
-    driver = std::make_unique<sim::KinematicDriver>(scene.dig.trajectory, scene.dig.heading,
-                                                    scene.dig.bite_depth, scene.dig.start_buried);
+    driver = sim::KinematicDriver::ForDig(scene.dig);
   }
   auto recorder = std::make_unique<Recorder>(std::move(driver));
   Recorder* rec = recorder.get();

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <string>
 
 #include "sim/exit_status.h"
@@ -85,9 +84,7 @@ TEST(KinematicDriverTest, LiftAfterTheTiltLeavesTheBedCarryingMaterial) {
   double bed_top = 0;
   const dem::Particles& p = world.system().particles();
   for (size_t i = 0; i < p.size(); ++i) bed_top = std::max(bed_top, p.x[i].z + p.radius[i]);
-  const DigSpec& dig = scene.dig;
-  world.StartDig(std::make_unique<KinematicDriver>(dig.trajectory, dig.heading, dig.bite_depth,
-                                                   dig.start_buried));
+  world.StartDig(KinematicDriver::ForDig(scene.dig));
   RunControl control;
   control.quiet = true;
   ASSERT_EQ(world.Run(control).exit_status, kExitOk);

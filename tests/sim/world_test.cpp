@@ -12,7 +12,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <memory>
 #include <string>
 
 #include "sim/exit_status.h"
@@ -72,9 +71,7 @@ uint64_t TinyDigHash(int threads) {
   sim::World world(scene, threads);
   sim::SettleReport report;
   EXPECT_EQ(world.Pour(true, &report), sim::kExitOk);
-  const sim::DigSpec& dig = scene.dig;
-  world.StartDig(std::make_unique<sim::KinematicDriver>(dig.trajectory, dig.heading,
-                                                        dig.bite_depth, dig.start_buried));
+  world.StartDig(sim::KinematicDriver::ForDig(scene.dig));
   sim::RunControl control;
   control.quiet = true;
   EXPECT_EQ(world.Run(control).exit_status, sim::kExitOk);
