@@ -71,15 +71,21 @@ double BetaForRestitution(double e) {
   return beta;
 }
 
+double DampingBeta(const Interaction& i) {
+  return i.damping == DampingLaw::kStandard ? StandardBeta(i.restitution)
+                                            : BetaForRestitution(i.restitution);
+}
+
 PairConstants MakePairConstants(const Material& a, const Material& b, const Interaction& i) {
   PairConstants c;
   const double ea = a.YoungsModulus(), eb = b.YoungsModulus();
   c.e_star = 1.0 / ((1 - a.poisson * a.poisson) / ea + (1 - b.poisson * b.poisson) / eb);
   c.g_star = 1.0 / ((2 - a.poisson) / a.shear_modulus + (2 - b.poisson) / b.shear_modulus);
-  c.damp = 2.0 * std::sqrt(5.0 / 6.0) * BetaForRestitution(i.restitution);
+  c.damp = 2.0 * std::sqrt(5.0 / 6.0) * DampingBeta(i);
   c.tangential_ratio = std::sqrt(4.0 * c.g_star / c.e_star);
   c.friction = i.friction;
   c.rolling_friction = i.rolling_friction;
+  c.rolling_model = i.rolling_model;
   return c;
 }
 

@@ -21,13 +21,22 @@ inline void Put(double* cx, double* cy, double* cz, size_t b, const Vec3& a) {
   cz[b] = a.z;
 }
 
-// Hertz-Mindlin forces of a batch of particle pairs: the same law as EvaluateContact
+// The rolling model of a batch kernel: one of RollingModel's for every contact, or each contact
+// its own (kMixedRolling, batches of several material pairs).
+constexpr int kEdemRolling = static_cast<int>(RollingModel::kEdem);
+constexpr int kCdtRolling = static_cast<int>(RollingModel::kCdt);
+constexpr int kLegacyRolling = static_cast<int>(RollingModel::kLegacy);
+constexpr int kMixedRolling = 3;
+
+// Hertz-Mindlin forces of a batch of particle pairs: the same law as EvaluateWallContact
 // (dem/contact.h: Hertz 1882 normal spring, Tsuji et al. 1992 damping, Mindlin 1949 no-slip
-// tangential spring with a Coulomb cap, constant directional rolling torque of Ai et al. 2011),
-// written without branches so that the compiler runs one contact per SIMD lane. kOnePair: every
-// contact has the material pair constants `one`; else each its own columns of the batch.
-template <bool kOnePair>
+// tangential spring with a Coulomb cap, and the rolling models), written without branches so
+// that the compiler runs one contact per SIMD lane. kOnePair: every contact has the material pair
+// constants `one`; else each its own columns of the batch. kModel: the rolling model (above).
+// kOwnSpins: the batch holds w_i and w_j (wx, wjx columns) rather than w_i - w_j.
+template <bool kOnePair, int kModel, bool kOwnSpins>
 void PairForces(ContactBatch& b, size_t nb, const PairConstants& one, double dt) {
+  static_assert(kModel != kEdemRolling || kOwnSpins, "edem rolling needs each particle's spin");
   ContactBatch& __restrict c = b;
   const int n = static_cast<int>(nb);
   // The pair constants: the one pair's, broadcast, or each contact's own column.
@@ -59,7 +68,8 @@ void PairForces(ContactBatch& b, size_t nb, const PairConstants& one, double dt)
     const double sq = std::sqrt(r_star * delta);
     const double sn = 2.0 * e_star * sq;
     const double gamma_n = damp * std::sqrt(sn / c.inv_m_star[e]);
-    const double fn = std::max(0.0, 2.0 / 3.0 * sn * delta - gamma_n * vn);
+    const double fe = 2.0 / 3.0 * sn * delta;  // elastic part
+    const double fn = std::max(0.0, fe - gamma_n * vn);
     // Tangential history: back into the tangent plane at its old length, plus v_t dt.
     double sx = c.sx[e], sy = c.sy[e], sz = c.sz[e];
     const double xi_n = sx * nx + sy * ny + sz * nz;
@@ -88,25 +98,91 @@ void PairForces(ContactBatch& b, size_t nb, const PairConstants& one, double dt)
     c.sx[e] = slide ? ftx * inv_st : sx;
     c.sy[e] = slide ? fty * inv_st : sy;
     c.sz[e] = slide ? ftz * inv_st : sz;
-    // Rolling friction against the relative rotation, limited so it cannot reverse it.
-    const double wrx = c.wx[e], wry = c.wy[e], wrz = c.wz[e];
-    const double w2 = wrx * wrx + wry * wry + wrz * wrz;
-    const double wn = std::sqrt(w2);
-    const double mr_mag = std::min(rolling * r_star * fn, wn / (dt * c.inv_inertia[e]));
-    const double mr_f = (rolling > 0.0 && w2 > 0.0) ? -mr_mag / wn : 0.0;
-    const double mrx = mr_f * wrx, mry = mr_f * wry, mrz = mr_f * wrz;
+    // Rolling friction (RollingTorque in dem/contact.h), each torque capped so that it cannot
+    // reverse the spin it acts against within one step: (mix, miy, miz) on i, (mjx, ...) on j.
+    double mix = 0, miy = 0, miz = 0, mjx = 0, mjy = 0, mjz = 0;
+    const double model = kModel == kMixedRolling ? c.rolling_model[e] : kModel;
+    if constexpr (kModel != kEdemRolling) {
+      // cdt and legacy: against the relative spin, equal and opposite.
+      const double wrx = kOwnSpins ? c.wx[e] - c.wjx[e] : c.wx[e];
+      const double wry = kOwnSpins ? c.wy[e] - c.wjy[e] : c.wy[e];
+      const double wrz = kOwnSpins ? c.wz[e] - c.wjz[e] : c.wz[e];
+      const double w2 = wrx * wrx + wry * wry + wrz * wrz;
+      const double wn = std::sqrt(w2);
+      const bool cdt = model == kCdtRolling;
+      const double force = cdt ? fe : fn;
+      const double mr_mag = std::min(rolling * r_star * force, wn / (dt * c.inv_inertia[e]));
+      const double mr_f = (rolling > 0.0 && w2 > 0.0) ? -mr_mag / wn : 0.0;
+      double mrx = mr_f * wrx, mry = mr_f * wry, mrz = mr_f * wrz;
+      if constexpr (kModel != kLegacyRolling) {  // cdt: the torque's normal part removed
+        const double mn = mrx * nx + mry * ny + mrz * nz;
+        mrx = cdt ? mrx - mn * nx : mrx;
+        mry = cdt ? mry - mn * ny : mry;
+        mrz = cdt ? mrz - mn * nz : mrz;
+      }
+      mix = mrx;
+      miy = mry;
+      miz = mrz;
+      mjx = -mrx;
+      mjy = -mry;
+      mjz = -mrz;
+    }
+    if constexpr (kOwnSpins && (kModel == kEdemRolling || kModel == kMixedRolling)) {
+      // edem: each particle against its own spin, lever r - delta/2.
+      const double wix = c.wx[e], wiy = c.wy[e], wiz = c.wz[e];
+      const double wjx = c.wjx[e], wjy = c.wjy[e], wjz = c.wjz[e];
+      const double wi2 = wix * wix + wiy * wiy + wiz * wiz;
+      const double wj2 = wjx * wjx + wjy * wjy + wjz * wjz;
+      const double wi = std::sqrt(wi2), wj = std::sqrt(wj2);
+      const double cap_dt = dt * c.inv_inertia[e];
+      const double mi_mag = std::min(rolling * (ri - 0.5 * delta) * fn, wi / cap_dt);
+      const double mj_mag = std::min(rolling * (rj - 0.5 * delta) * fn, wj / cap_dt);
+      const double fi = (rolling > 0.0 && wi2 > 0.0) ? -mi_mag / wi : 0.0;
+      const double fj = (rolling > 0.0 && wj2 > 0.0) ? -mj_mag / wj : 0.0;
+      const bool edem = model == kEdemRolling;
+      mix = edem ? fi * wix : mix;
+      miy = edem ? fi * wiy : miy;
+      miz = edem ? fi * wiz : miz;
+      mjx = edem ? fj * wjx : mjx;
+      mjy = edem ? fj * wjy : mjy;
+      mjz = edem ? fj * wjz : mjz;
+    }
     // Force on i and the torques on both.
     c.fx[e] = ftx - fn * nx;
     c.fy[e] = fty - fn * ny;
     c.fz[e] = ftz - fn * nz;
     const double cx = ny * ftz - nz * fty, cy = nz * ftx - nx * ftz, cz = nx * fty - ny * ftx;
-    c.tix[e] = ri * cx + mrx;
-    c.tiy[e] = ri * cy + mry;
-    c.tiz[e] = ri * cz + mrz;
-    c.tjx[e] = rj * cx - mrx;
-    c.tjy[e] = rj * cy - mry;
-    c.tjz[e] = rj * cz - mrz;
+    c.tix[e] = ri * cx + mix;
+    c.tiy[e] = ri * cy + miy;
+    c.tiz[e] = ri * cz + miz;
+    c.tjx[e] = rj * cx + mjx;
+    c.tjy[e] = rj * cy + mjy;
+    c.tjz[e] = rj * cz + mjz;
     c.overlap[e] = delta / (2.0 * std::min(ri, rj));
+  }
+}
+
+// Runs the batch kernel that fits: one pair's constants (`one`, its rolling model) or each
+// contact's own (mixed rolling models), with the spins as gathered.
+void EvaluateBatch(ContactBatch& b, size_t nb, const PairConstants* one, double dt,
+                   bool own_spins) {
+  if (one == nullptr) {
+    own_spins ? PairForces<false, kMixedRolling, true>(b, nb, PairConstants{}, dt)
+              : PairForces<false, kMixedRolling, false>(b, nb, PairConstants{}, dt);
+    return;
+  }
+  switch (one->rolling_model) {
+    case RollingModel::kEdem:
+      PairForces<true, kEdemRolling, true>(b, nb, *one, dt);
+      break;
+    case RollingModel::kCdt:
+      own_spins ? PairForces<true, kCdtRolling, true>(b, nb, *one, dt)
+                : PairForces<true, kCdtRolling, false>(b, nb, *one, dt);
+      break;
+    case RollingModel::kLegacy:
+      own_spins ? PairForces<true, kLegacyRolling, true>(b, nb, *one, dt)
+                : PairForces<true, kLegacyRolling, false>(b, nb, *one, dt);
+      break;
   }
 }
 
@@ -132,6 +208,7 @@ struct PassArrays {
   int nm, np;
   double dt;
   bool compact;      // visit the busy particles only (sleeping)
+  bool own_spins;    // gather w_i and w_j, not w_i - w_j (some pair rolls by the edem model)
   int one_material;  // the material of every particle, or -1
   bool alike;        // every particle alike (Alike): these sums stand for the per-particle ones
   double alike_radius, alike_rsum, alike_inv_m_star, alike_inv_inertia;
@@ -225,7 +302,12 @@ void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch
       Put(batch.dx, batch.dy, batch.dz, b, x[j] - x[i]);
       Put(batch.dvx, batch.dvy, batch.dvz, b, v[j] - v[i]);
       Put(batch.ax, batch.ay, batch.az, b, ri * w[i] + rj * w[j]);
-      Put(batch.wx, batch.wy, batch.wz, b, w[i] - w[j]);
+      if (a.own_spins) {
+        Put(batch.wx, batch.wy, batch.wz, b, w[i]);
+        Put(batch.wjx, batch.wjy, batch.wjz, b, w[j]);
+      } else {
+        Put(batch.wx, batch.wy, batch.wz, b, w[i] - w[j]);
+      }
       batch.ri[b] = ri;
       batch.rj[b] = rj;
       batch.inv_m_star[b] = alike ? a.alike_inv_m_star : inv_mass[i] + inv_mass[j];
@@ -236,9 +318,9 @@ void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch
     //    without branches), with one material pair's constants for all (the common case) or
     //    each contact's own.
     if (one_material) {
-      PairForces<true>(batch, nb, a.pair[a.one_material * nm + a.one_material], a.dt);
+      EvaluateBatch(batch, nb, &a.pair[a.one_material * nm + a.one_material], a.dt, a.own_spins);
     } else if (nb > 0 && uniform) {
-      PairForces<true>(batch, nb, a.pair[batch.pair[0]], a.dt);
+      EvaluateBatch(batch, nb, &a.pair[batch.pair[0]], a.dt, a.own_spins);
     } else {
       for (size_t b = 0; b < nb; ++b) {
         const PairConstants& c = a.pair[batch.pair[b]];
@@ -248,8 +330,9 @@ void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch
         batch.tangential_ratio[b] = c.tangential_ratio;
         batch.friction[b] = c.friction;
         batch.rolling[b] = c.rolling_friction;
+        batch.rolling_model[b] = static_cast<double>(c.rolling_model);
       }
-      PairForces<false>(batch, nb, a.pair[0], a.dt);
+      EvaluateBatch(batch, nb, nullptr, a.dt, a.own_spins);
     }
     // 3. Accumulate in batch order (fixed by the data: deterministic).
     for (size_t b = 0; b < nb; ++b) {
@@ -299,8 +382,9 @@ void SlabPlaneForces(const PassArrays& a, const Workspace& m, int s, Vec3* plane
       }
       const Vec3 nrm = -pl.normal;  // from the particle to the wall
       const Vec3 v_rel = -(vi + ri * Cross(wi, nrm));
-      const ContactForce cf = EvaluateContact(a.wall[a.mat[i] * np + a.wall_k[e]], nrm, delta, ri,
-                                              mi, v_rel, wi, inv_ii, a.dt, a.wall_shear[e]);
+      const ContactForce cf =
+          EvaluateWallContact(a.wall[a.mat[i] * np + a.wall_k[e]], nrm, delta, ri, mi, v_rel, wi,
+                              Vec3{}, inv_ii, a.dt, a.wall_shear[e]);
       const Vec3 fa = cf.ft - cf.fn * nrm;
       fi += fa;
       ti += ri * Cross(nrm, cf.ft) + cf.mr;
@@ -343,6 +427,12 @@ PassArrays TakeArrays(Workspace& m, Particles& p, const SystemConfig& config, in
   a.np = static_cast<int>(config.planes.size());
   a.dt = config.time_step;
   a.compact = config.sleep.enabled;
+  // The particles' own spins are gathered when a pair that can occur rolls by the edem model.
+  a.own_spins = false;
+  for (int k = 0; k < nm * nm; ++k) {
+    const bool occurs = m.particle_material < 0 || k == m.particle_material * (nm + 1);
+    a.own_spins = a.own_spins || (occurs && m.pair[k].rolling_model == RollingModel::kEdem);
+  }
   a.one_material = m.particle_material;
   a.alike = m.alike.all;  // each sum below is the one the per-particle arrays would give
   a.alike_radius = m.alike.radius;

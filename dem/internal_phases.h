@@ -63,9 +63,9 @@ void ComputeForces(Workspace& m, Particles& p, const SystemConfig& config, int n
 MeshState MakeMeshState(TriangleMesh mesh, const MaterialTable& materials);
 // Sets the mesh's pose and twist and places its vertices in the world.
 void MoveMesh(MeshState& ms, const MeshMotion& motion);
-// Particle-mesh contacts of every mesh into p.f, p.t and the mesh wrenches; wakes the sleeping
-// particles a mesh touches.
-void MeshForces(Workspace& m, Particles& p, double dt, int nt);
+// Particle-mesh contacts of every mesh into p.f, p.t and the mesh wrenches (the rolling couples
+// counted in a mesh's torque when rolling_on_mesh); wakes the sleeping particles a mesh touches.
+void MeshForces(Workspace& m, Particles& p, double dt, bool rolling_on_mesh, int nt);
 // World bounding box of each triangle grown by `margin` (lo at 2e, hi at 2e + 1), and the box
 // around them all.
 void TriangleBoxes(const std::vector<Vec3>& world, const std::vector<std::array<int32_t, 3>>& tris,

@@ -61,7 +61,7 @@ struct Alike {
 
 // Contacts gathered before one vectorised force evaluation (a block of particles' worth; a
 // particle with more near pairs than that comes in pieces).
-constexpr int kBatchContacts = 64;  // 40 arrays x 64 x 8 B = 20 KB: stays in L1
+constexpr int kBatchContacts = 64;  // 44 arrays x 64 x 8 B = 22 KB: stays in L1
 
 // Per-thread scratch of the force pass: the particle-pair contacts of a block of particles,
 // gathered so their forces can be computed in one vectorised loop (structure of arrays). Fixed
@@ -72,11 +72,13 @@ struct alignas(64) ContactBatch {
   double dx[K], dy[K], dz[K];     // x_j - x_i [m]
   double dvx[K], dvy[K], dvz[K];  // v_j - v_i [m/s]
   double ax[K], ay[K], az[K];     // r_i w_i + r_j w_j [m/s]
-  double wx[K], wy[K], wz[K];     // w_i - w_j [rad/s]
+  double wx[K], wy[K], wz[K];     // w_i - w_j, or w_i when the pass takes own spins [rad/s]
+  double wjx[K], wjy[K], wjz[K];  // w_j when the pass takes own spins (edem rolling) [rad/s]
   double ri[K], rj[K];            // radii [m]
   double inv_m_star[K];           // 1/m_i + 1/m_j [1/kg]
   double inv_inertia[K];          // 1/I_i + 1/I_j [1/(kg m^2)]
   double e_star[K], g_star[K], damp[K], tangential_ratio[K], friction[K], rolling[K];
+  double rolling_model[K];     // the pair's RollingModel, as a number (mixed batches only)
   double sx[K], sy[K], sz[K];  // tangential history in, then out [m]
   // Outputs.
   double fx[K], fy[K], fz[K];     // force on i [N]

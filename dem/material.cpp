@@ -34,6 +34,42 @@ int MaterialTable::Find(const std::string& name) const {
   return -1;
 }
 
+const char* Name(RollingModel model) {
+  switch (model) {
+    case RollingModel::kEdem:
+      return "edem";
+    case RollingModel::kCdt:
+      return "cdt";
+    case RollingModel::kLegacy:
+      return "legacy";
+  }
+  return "?";
+}
+
+const char* Name(DampingLaw law) {
+  return law == DampingLaw::kStandard ? "standard" : "exact_restitution";
+}
+
+bool ParseRollingModel(const std::string& name, RollingModel* model) {
+  for (RollingModel m : {RollingModel::kEdem, RollingModel::kCdt, RollingModel::kLegacy}) {
+    if (name == Name(m)) {
+      *model = m;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool ParseDampingLaw(const std::string& name, DampingLaw* law) {
+  for (DampingLaw d : {DampingLaw::kStandard, DampingLaw::kExactRestitution}) {
+    if (name == Name(d)) {
+      *law = d;
+      return true;
+    }
+  }
+  return false;
+}
+
 double RayleighTimeStep(double radius, const Material& material) {
   return M_PI * radius * std::sqrt(material.density / material.shear_modulus) /
          (0.1631 * material.poisson + 0.8766);

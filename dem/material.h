@@ -15,11 +15,32 @@ struct Material {
   double YoungsModulus() const { return 2.0 * shear_modulus * (1.0 + poisson); }  // E = 2G(1+nu)
 };
 
+// How the rolling-friction torque is made (dem/contact.h gives each equation and its source).
+enum class RollingModel : unsigned char {
+  kEdem,    // "edem": EDEM's standard model, each particle against its own spin (the default)
+  kCdt,     // "cdt": LIGGGHTS' constant directional torque, twist removed
+  kLegacy,  // "legacy": scoopsim before issue 18, against the whole relative spin (twist too)
+};
+// How the normal damping is set from the restitution (dem/contact.h).
+enum class DampingLaw : unsigned char {
+  kStandard,  // "standard": beta = ln e / sqrt(ln^2 e + pi^2), as EDEM and LIGGGHTS (default)
+  kExactRestitution,  // "exact_restitution": beta solved so that a Hertz impact has exactly e
+};
+
+// The names used in materials files ("edem", "cdt", "legacy"; "standard", "exact_restitution"),
+// and back: false for an unknown name.
+const char* Name(RollingModel model);
+const char* Name(DampingLaw law);
+bool ParseRollingModel(const std::string& name, RollingModel* model);
+bool ParseDampingLaw(const std::string& name, DampingLaw* law);
+
 // Parameters of the contact between two materials (symmetric in the pair).
 struct Interaction {
   double restitution = 0.5;       // e in (0, 1]: v_out / v_in of a head-on binary collision
   double friction = 0.5;          // static friction coefficient mu_s >= 0 (Coulomb cap)
-  double rolling_friction = 0.0;  // mu_r >= 0 (constant directional torque model)
+  double rolling_friction = 0.0;  // mu_r >= 0
+  RollingModel rolling_model = RollingModel::kEdem;
+  DampingLaw damping = DampingLaw::kStandard;
 };
 
 class MaterialTable {

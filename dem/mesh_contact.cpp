@@ -124,8 +124,9 @@ void PrepareGroups(MeshState& ms) {
 }
 
 // Contacts of candidate group g (one particle) with the mesh, into the group's results and its
-// fresh history slots. Returns the deepest overlap / diameter.
-double GroupContacts(MeshState& ms, const Particles& p, int g, double dt) {
+// fresh history slots; the rolling couples count in the mesh's torque when rolling_on_mesh.
+// Returns the deepest overlap / diameter.
+double GroupContacts(MeshState& ms, const Particles& p, int g, double dt, bool rolling_on_mesh) {
   const Vec3 origin = ms.motion.pose.position, vel = ms.motion.velocity;
   const Vec3 omega = ms.motion.angular_velocity;
   const auto& tris = ms.mesh.triangles;
@@ -177,7 +178,6 @@ double GroupContacts(MeshState& ms, const Particles& p, int g, double dt) {
     const double delta = r - hit.dist;
     const Vec3 v_mesh = vel + Cross(omega, hit.point - origin);
     const Vec3 v_rel = v_mesh - (p.v[i] + r * Cross(p.w[i], nrm));
-    const Vec3 w_rel = p.w[i] - omega;
     // Tangential history: the stored contact of this particle whose normal is closest.
     Vec3 shear;
     int best = -1;
@@ -193,12 +193,14 @@ double GroupContacts(MeshState& ms, const Particles& p, int g, double dt) {
       used[best - hb] = true;
       shear = ms.history[best].shear;
     }
-    const ContactForce cf = EvaluateContact(ms.constants[p.material[i]], nrm, delta, r, p.mass[i],
-                                            v_rel, w_rel, p.inv_inertia[i], dt, shear);
+    const ContactForce cf =
+        EvaluateWallContact(ms.constants[p.material[i]], nrm, delta, r, p.mass[i], v_rel, p.w[i],
+                            omega, p.inv_inertia[i], dt, shear);
     const Vec3 fa = cf.ft - cf.fn * nrm;  // on the particle
     fi += fa;
     ti += r * Cross(nrm, cf.ft) + cf.mr;
-    tm += Cross(hit.point - origin, -fa) - cf.mr;
+    tm += Cross(hit.point - origin, -fa);
+    if (rolling_on_mesh) tm -= cf.mr;
     ms.fresh[static_cast<size_t>(kMaxContacts) * g + nk] = {i, p.id[i], nrm, shear};
     kept_point[nk] = hit.point;
     kept_normal[nk] = out;
@@ -256,7 +258,7 @@ void SumGroups(Workspace& m, Particles& p, int k) {
 // tangent plane of every contact kept so far. On a flat or convex patch all closest points lie
 // in (or below) that plane and only the nearest counts; in a concave corner the second face
 // rises above it and is a second, genuine contact.
-void MeshForces(Workspace& m, Particles& p, double dt, int nt) {
+void MeshForces(Workspace& m, Particles& p, double dt, bool rolling_on_mesh, int nt) {
   int64_t total = 0;
   double worst_overlap = 0;
   m.mesh_worst = 0;
@@ -269,7 +271,8 @@ void MeshForces(Workspace& m, Particles& p, double dt, int nt) {
     const int ng = static_cast<int>(ms.group_particle.size());
     double worst = 0;
 #pragma omp parallel for schedule(static) num_threads(nt) reduction(max : worst)
-    for (int g = 0; g < ng; ++g) worst = std::max(worst, GroupContacts(ms, p, g, dt));
+    for (int g = 0; g < ng; ++g)
+      worst = std::max(worst, GroupContacts(ms, p, g, dt, rolling_on_mesh));
     SumGroups(m, p, k);
     total += ms.wrench.contacts;
     worst_overlap = std::max(worst_overlap, worst);

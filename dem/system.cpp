@@ -223,7 +223,7 @@ StepStatus System::Step() {
                           &plane_force_);  // adds its own phases (near, pairs)
   t_phase = internal::Now();
   if (!m.meshes.empty()) {
-    internal::MeshForces(m, p_, dt, num_threads_);
+    internal::MeshForces(m, p_, dt, config_.mesh_rolling_torque, num_threads_);
     lap(phase_times_.mesh);
   }
 

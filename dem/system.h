@@ -45,10 +45,10 @@ struct SleepConfig {
 };
 
 struct SystemConfig {
-  Vec3 gravity{0, 0, -9.81};    // [m/s^2]
-  double time_step = 0;         // [s]
-  double skin = 0;              // Verlet-list skin [m]; the list is rebuilt when a particle has
-                                // moved more than skin/2 since the last build
+  Vec3 gravity{0, 0, -9.81};  // [m/s^2]
+  double time_step = 0;       // [s]
+  double skin = 0;            // Verlet-list skin [m]; the list is rebuilt when a particle has
+                              // moved more than skin/2 since the last build
   // The force pass scans only the list pairs closer than near_fraction * skin (gap between the
   // surfaces), made again when some particle may have moved half that. A pure saving: any value
   // > 0 gives bit-identical results (a larger one, the whole list).
@@ -59,6 +59,9 @@ struct SystemConfig {
   double max_speed = 100.0;            // runaway speed [m/s]; knob: time step, restitution
   double max_overlap_fraction = 0.05;  // overlap / smaller diameter; knob: time step, stiffness
   SleepConfig sleep;
+  // The rolling-friction couples of particle-mesh contacts count in the mesh's torque (EDEM
+  // leaves them out by default, and so does this).
+  bool mesh_rolling_torque = false;
 };
 
 // Persistent state of one contact, keyed by the persistent ids of its two sides. `b` is a particle
@@ -133,8 +136,9 @@ struct PhaseTimes {
 // Wrench of the particles on a mesh during the last step, world frame.
 struct MeshWrench {
   Vec3 force;   // sum of the contact forces on the mesh [N]
-  Vec3 torque;  // sum of (contact point - body origin) x force + rolling couples [N m], about the
-                // mesh body origin (MeshMotion::pose.position) at the last step
+  Vec3 torque;  // sum of (contact point - body origin) x force [N m] (+ the rolling couples with
+                // SystemConfig::mesh_rolling_torque), about the mesh body origin
+                // (MeshMotion::pose.position) at the last step
   int64_t contacts = 0;
 };
 

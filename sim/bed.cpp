@@ -13,6 +13,7 @@ dem::SystemConfig MakeSystemConfig(const Scene& scene) {
   c.time_step = scene.time_step;
   c.skin = scene.skin;
   c.max_overlap_fraction = scene.max_overlap;
+  c.mesh_rolling_torque = scene.dig.scoop.rolling_torque;
   const dem::Vec3 lo = scene.box_min, hi = scene.box_max;
   // The grid covers the box and some head room above its open top.
   c.domain_min = lo;

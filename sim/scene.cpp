@@ -203,6 +203,17 @@ class MapReader {
     return value.Scalar();
   }
 
+  // true or false (YAML's spellings of a boolean).
+  bool Bool(const char* key, bool fallback) const {
+    if (!Has(key)) return fallback;
+    const YAML::Node value = node_[key];
+    bool v = false;
+    if (!value.IsScalar() || !YAML::convert<bool>::decode(value, v)) {
+      Fail(file_, LineOf(value), Key(key), "true or false", Describe(value));
+    }
+    return v;
+  }
+
   // [x, y, z] of finite numbers.
   dem::Vec3 Vector(const char* key, const std::string& expected) const {
     const YAML::Node value = Need(key, expected);
@@ -261,8 +272,25 @@ std::string ResolveAgainst(const std::string& owner_file, const std::string& nam
   return (std::filesystem::path(owner_file).parent_path() / p).string();
 }
 
+// The keys rolling_model and damping of a map, where present, into `out`.
+void ParseContactLaw(const MapReader& m, dem::Interaction* out) {
+  if (m.Has("rolling_model")) {
+    const char* expected = "edem, cdt or legacy (rolling friction model, dem/contact.h)";
+    const std::string name = m.String("rolling_model", expected);
+    if (!dem::ParseRollingModel(name, &out->rolling_model))
+      Fail(m.file(), LineOf(m.node()["rolling_model"]), m.Key("rolling_model"), expected, name);
+  }
+  if (m.Has("damping")) {
+    const char* expected = "standard or exact_restitution (damping law, dem/contact.h)";
+    const std::string name = m.String("damping", expected);
+    if (!dem::ParseDampingLaw(name, &out->damping))
+      Fail(m.file(), LineOf(m.node()["damping"]), m.Key("damping"), expected, name);
+  }
+}
+
 void ParseMaterials(const std::string& file, const YAML::Node& root, dem::MaterialTable* table) {
-  const MapReader top(file, root, "", {"materials", "interactions", "source", "notes"});
+  const MapReader top(file, root, "",
+                      {"materials", "interactions", "contact_law", "source", "notes"});
 
   // Materials: name -> {density, shear_modulus, poisson}.
   const YAML::Node materials =
@@ -305,11 +333,20 @@ void ParseMaterials(const std::string& file, const YAML::Node& root, dem::Materi
          "a list of {pair: [a, b], restitution, friction, rolling_friction}",
          Describe(interactions));
   }
+  // contact_law: {rolling_model, damping}, the choices of every pair that names none itself
+  // (dem/contact.h); without it, as the study's code (EDEM): edem rolling, standard damping.
+  dem::Interaction law;
+  if (top.Has("contact_law")) {
+    ParseContactLaw(
+        MapReader(file, top.node()["contact_law"], "contact_law", {"rolling_model", "damping"}),
+        &law);
+  }
   std::map<std::pair<int, int>, int> defined;  // pair -> line of its first definition
   for (size_t i = 0; i < interactions.size(); ++i) {
     const std::string path = "interactions[" + std::to_string(i) + "]";
     const MapReader in(file, interactions[i], path,
-                       {"pair", "restitution", "friction", "rolling_friction", "source", "notes"});
+                       {"pair", "restitution", "friction", "rolling_friction", "rolling_model",
+                        "damping", "source", "notes"});
     const std::string pair_expected = "two material names from materials (" + known + ")";
     const YAML::Node pair = in.Need("pair", pair_expected);
     if (!pair.IsSequence() || pair.size() != 2 || !pair[0].IsScalar() || !pair[1].IsScalar()) {
@@ -342,6 +379,10 @@ void ParseMaterials(const std::string& file, const YAML::Node& root, dem::Materi
     interaction.friction = number("friction", "a number >= 0 (static friction)", NonNegative);
     interaction.rolling_friction =
         number("rolling_friction", "a number >= 0 (rolling friction)", NonNegative);
+    // The contact law's choices: the pair's own keys, else the file's contact_law.
+    interaction.rolling_model = law.rolling_model;
+    interaction.damping = law.damping;
+    ParseContactLaw(in, &interaction);
     table->SetInteraction(a, b, interaction);
   }
 }
@@ -487,8 +528,9 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
       {"scoop", "trajectory", "passes", "bite_depth", "surface", "interval", "start_buried"});
   // Scoop.
   const YAML::Node scoop_node = d.Need("scoop", "a map with keys mesh, material");
-  const MapReader sc(file, scoop_node, "dig.scoop",
-                     {"mesh", "scale", "material", "mass", "com", "density", "cavity"});
+  const MapReader sc(
+      file, scoop_node, "dig.scoop",
+      {"mesh", "scale", "material", "mass", "com", "density", "cavity", "rolling_torque"});
   ScoopSpec& scoop = dig.scoop;
   scoop.mesh = ResolveAgainst(file, sc.String("mesh", "the path of a mesh file (STL, OBJ, ...)"));
   if (!std::filesystem::exists(scoop.mesh)) {
@@ -519,6 +561,7 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
              scene->materials_path,
          "none");
   }
+  scoop.rolling_torque = sc.Bool("rolling_torque", scoop.rolling_torque);
   scoop.mass = sc.Number("mass", scoop.mass, "a number > 0 (kg)", Positive);
   if (sc.Has("com")) scoop.com = sc.Vector("com", "a list of 3 numbers [x, y, z] (m, l_scoop)");
   scoop.density = sc.Number("density", 0.0, "a number > 0 (kg/m^3)", Positive);

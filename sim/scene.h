@@ -83,6 +83,9 @@ struct ScoopSpec {
                                // l_scoop frame, name "scoop", material = material_index
   std::string material;        // scoop material (key dig.scoop.material)
   int material_index = -1;
+  // The particles' rolling-friction couples count in the scoop's torque (as EDEM's option; off
+  // by default, as EDEM's default). Key dig.scoop.rolling_torque.
+  bool rolling_torque = false;
   double mass = 0.30936;                   // [kg] (FACTS.md section 2, l_scoop)
   dem::Vec3 com{0.001315, 0.0, 0.045328};  // centre of mass in l_scoop [m]
   double density = 0;  // > 0: `mass` and `com` were computed by LoadScene from the (closed)

@@ -157,5 +157,30 @@ TEST(DampingTest, EdemClosedFormIsOffForHertz) {
   EXPECT_GT(RestitutionForBeta(0.1), RestitutionForBeta(0.2));
 }
 
+// The standard law's beta = -ln e / sqrt(ln^2 e + pi^2) against values worked by hand
+// (e = 0.88: ln e = -0.127833, beta = 0.0406570; e = 0.5: 0.215454), and the restitution it
+// gives a Hertz impact from two independent integrations (dem::RestitutionForBeta, nondimensional
+// RK4, and test::HertzImpactRestitution, dimensional Heun) agreeing to 1e-4: 0.8829 and 0.5503.
+TEST(DampingTest, StandardLawBetaAndItsHertzRestitution) {
+  EXPECT_NEAR(StandardBeta(0.88), 0.0406570, 1e-6);
+  EXPECT_NEAR(StandardBeta(0.5), 0.215454, 1e-6);
+  EXPECT_EQ(StandardBeta(1.0), 0.0);
+  const PairConstants pc = MakePairConstants(test::Snow(), test::Snow(), {});
+  const double r = 1.75e-3, m = 300.0 * 4.0 / 3.0 * M_PI * r * r * r;
+  for (const auto& [e, hertz] : {std::pair{0.88, 0.8829}, std::pair{0.5, 0.5503}}) {
+    const double independent =
+        test::HertzImpactRestitution(StandardBeta(e), pc.e_star, 0.5 * r, 0.5 * m, 0.1);
+    EXPECT_NEAR(RestitutionForBeta(StandardBeta(e)), independent, 1e-4) << "e " << e;
+    EXPECT_NEAR(independent, hertz, 1e-4) << "e " << e;
+  }
+  // Each law's beta reaches PairConstants::damp = 2 sqrt(5/6) beta.
+  for (const DampingLaw law : {DampingLaw::kStandard, DampingLaw::kExactRestitution}) {
+    const Interaction in{0.7, 0.5, 0.0, RollingModel::kEdem, law};
+    const double beta = law == DampingLaw::kStandard ? StandardBeta(0.7) : BetaForRestitution(0.7);
+    EXPECT_DOUBLE_EQ(MakePairConstants(test::Snow(), test::Snow(), in).damp,
+                     2.0 * std::sqrt(5.0 / 6.0) * beta);
+  }
+}
+
 }  // namespace
 }  // namespace dem

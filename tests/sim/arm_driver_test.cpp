@@ -225,7 +225,7 @@ TEST(ArmDriverTest, BoulderRaisesJointTorqueLimit) {
   probe.LoadBed(bed);
   const double start = probe.system().time();
   const DigRun run = Dig(scene, bed, true, 2);
-  // The blade meets the sphere after ~0.55 s of push; the demand reaches 73 N m soon after.
+  // The blade meets the sphere in the push; the demand reaches 73 N m ~0.69 s into it.
   ExpectTorqueLimitOnProxPitch(run, scene, 0.45, 0.9, start);
   EXPECT_GT(run.arm.peak_demanded[kProxPitch], run.arm.effort_limit[kProxPitch]);
 }

@@ -3,6 +3,7 @@
 #include "sim/bed.h"
 
 #include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -44,8 +45,12 @@ void Bed::Settles() {
 }
 
 // Solid fraction of a random packing of frictional monodisperse spheres: between random loose
-// (~0.55) and random close (~0.64) packing. Measured in the interior (two diameters from the side
-// walls and the floor, three below the surface), counting the spheres whose centre lies inside.
+// and random close (~0.64) packing. Spheres that roll freely pack no looser than ~0.55; rolling
+// resistance (here EDEM's model, mu_r 0.05, which brakes every spin) lets a poured packing stay
+// looser than that (Santos et al. 2020, "Granular packings with sliding, rolling, and twisting
+// friction", Phys. Rev. E 102, 032903): bounds 0.50 and 0.64. Measured in the interior (two
+// diameters from the side walls and the floor, three below the surface), counting the spheres whose
+// centre lies inside.
 void Bed::SolidFractionBetweenLooseAndClosePacking() {
   const dem::Particles& p = system_->particles();
   const double d = 2 * scene_->bed.radius_max;
@@ -63,7 +68,7 @@ void Bed::SolidFractionBetweenLooseAndClosePacking() {
       volume += 4.0 / 3.0 * M_PI * std::pow(p.radius[i], 3);
   }
   const double fraction = volume / ((hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z));
-  EXPECT_GT(fraction, 0.55);
+  EXPECT_GT(fraction, 0.50);
   EXPECT_LT(fraction, 0.64);
 }
 

@@ -244,6 +244,31 @@ TEST(SceneTest, ShippedMaterialsHaveEveryPairThatCanMeet) {
   EXPECT_NEAR(table[aluminium].YoungsModulus(), 6.9e10, 1e-3 * 6.9e10);
 }
 
+// The contact law's choices: the shipped file takes the defaults (the study's code: edem rolling,
+// standard damping); a file's contact_law sets every pair that names none, a pair's own keys win.
+TEST(SceneTest, ContactLawFromTheFileAndFromEachPair) {
+  dem::MaterialTable shipped;
+  LoadMaterials(kSourceDir + "/scenes/materials.yaml", &shipped);
+  const int snow = shipped.Find("snow");
+  EXPECT_EQ(shipped.interaction(snow, snow).rolling_model, dem::RollingModel::kEdem);
+  EXPECT_EQ(shipped.interaction(snow, snow).damping, dem::DampingLaw::kStandard);
+  const std::string path = WriteFile("law_mats.yaml", R"(contact_law: {rolling_model: cdt}
+materials:
+  snow: {density: 300, shear_modulus: 1.0e7, poisson: 0.36}
+  wall: {density: 7850, shear_modulus: 7.9e10, poisson: 0.3}
+interactions:
+  - {pair: [snow, snow], restitution: 0.88, friction: 0.58, rolling_friction: 0.05}
+  - {pair: [snow, wall], restitution: 0.7, friction: 0.58, rolling_friction: 0.05,
+     rolling_model: legacy, damping: exact_restitution}
+)");
+  dem::MaterialTable t;
+  LoadMaterials(path, &t);
+  EXPECT_EQ(t.interaction(0, 0).rolling_model, dem::RollingModel::kCdt);
+  EXPECT_EQ(t.interaction(0, 0).damping, dem::DampingLaw::kStandard);
+  EXPECT_EQ(t.interaction(0, 1).rolling_model, dem::RollingModel::kLegacy);
+  EXPECT_EQ(t.interaction(1, 0).damping, dem::DampingLaw::kExactRestitution);
+}
+
 TEST(SceneTest, MissingSceneFileNamesTheFileAsGiven) {
   try {
     LoadScene("no/such/scene.yaml");
@@ -398,6 +423,18 @@ const BadCase kBadCases[] = {
      "rolling_friction: 0.05}",
      "rolling_friction: -1}",
      {"@_mats.yaml:5: interactions[0].rolling_friction: expected a number >= 0", "got -1"}},
+    {"unknown_rolling_model",
+     "",
+     "",
+     "rolling_friction: 0.05}",
+     "rolling_friction: 0.05, rolling_model: epsd}",
+     {"@_mats.yaml:5: interactions[0].rolling_model: expected edem, cdt or legacy", "got epsd"}},
+    {"unknown_damping_law",
+     "",
+     "",
+     "interactions:",
+     "contact_law: {damping: exact}\ninteractions:",
+     {"@_mats.yaml:4: contact_law.damping: expected standard or exact_restitution", "got exact"}},
     {"poisson_half",
      "",
      "",

@@ -5,6 +5,8 @@
 // Determinism of a whole run through the CLI (scoopsim run): the same scene gives the same root
 // state_hash attribute with 1 and 2 threads, and in two runs; a run from a saved bed equals a run
 // that made the bed itself.
+#include "sim/world.h"
+
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
@@ -16,7 +18,6 @@
 
 #include "sim/exit_status.h"
 #include "sim/scene.h"
-#include "sim/world.h"
 #include "tests/cli_util.h"
 
 namespace {
@@ -62,12 +63,30 @@ uint64_t StateHash(const std::string& h5) {
 }
 
 // History of kTinyDigHash (newest first):
+//   df724007ea818c7c  2026-12-02  issue 18: the contact law's defaults became the study's code's
+//                                 (EDEM's rolling friction, the standard damping formula).
 //   832715449e8ff685  2026-12-02  snow digs at 0.3 t_R kept tiny_dig at 0.25 t_R; value of record
 //                                 when the run loop became sim::World (no physics change).
-constexpr uint64_t kTinyDigHash = 0x832715449e8ff685ull;
+constexpr uint64_t kTinyDigHash = 0xdf724007ea818c7cull;
 
-uint64_t TinyDigHash(int threads) {
-  const sim::Scene scene = sim::LoadScene(kSourceDir + "/scenes/tiny_dig.yaml");
+// The contact law before issue 18 (rolling_model legacy, damping exact_restitution on every pair)
+// still gives that run's hash: old results can be reproduced bit for bit.
+constexpr uint64_t kTinyDigLegacyLawHash = 0x832715449e8ff685ull;
+
+uint64_t TinyDigHash(int threads, bool legacy_law = false) {
+  sim::Scene scene = sim::LoadScene(kSourceDir + "/scenes/tiny_dig.yaml");
+  if (legacy_law) {
+    dem::MaterialTable& t = scene.materials;
+    for (int a = 0; a < t.size(); ++a) {
+      for (int b = a; b < t.size(); ++b) {
+        if (!t.has_interaction(a, b)) continue;
+        dem::Interaction in = t.interaction(a, b);
+        in.rolling_model = dem::RollingModel::kLegacy;
+        in.damping = dem::DampingLaw::kExactRestitution;
+        t.SetInteraction(a, b, in);
+      }
+    }
+  }
   sim::World world(scene, threads);
   sim::SettleReport report;
   EXPECT_EQ(world.Pour(true, &report), sim::kExitOk);
@@ -81,9 +100,15 @@ uint64_t TinyDigHash(int threads) {
 
 TEST(WorldTest, GoldenStateHashOnOneAndTwoThreads) {
   for (const int threads : {1, 2}) {
-    EXPECT_EQ(TinyDigHash(threads), kTinyDigHash) << threads << " thread(s): the physics changed; "
-                                                   "if on purpose, update kTinyDigHash and say why";
+    EXPECT_EQ(TinyDigHash(threads), kTinyDigHash)
+        << threads
+        << " thread(s): the physics changed; "
+           "if on purpose, update kTinyDigHash and say why";
   }
+}
+
+TEST(WorldTest, LegacyContactLawReproducesTheHashBeforeIssue18) {
+  EXPECT_EQ(TinyDigHash(2, true), kTinyDigLegacyLawHash);
 }
 
 TEST(RunDeterminismTest, RunStateHashIndependentOfThreadsAndRepeatable) {
@@ -163,9 +188,10 @@ TEST(RunDeterminismTest, StopAfterAndBenchStepOnASavedBed) {
   for (int threads : {1, 2}) {
     const fs::path out = TempDir() / ("step_" + std::to_string(threads) + ".json");
     // 2000 steps run past the scene's 0.01 s: bench step times steps, whatever the duration.
-    ASSERT_EQ(scoopsim_test::RunScoopsim("bench step " + scene + " --warm 5 --steps 2000 --threads " +
-                                         std::to_string(threads) + " > " + out.string()),
-              0);
+    ASSERT_EQ(
+        scoopsim_test::RunScoopsim("bench step " + scene + " --warm 5 --steps 2000 --threads " +
+                                   std::to_string(threads) + " > " + out.string()),
+        0);
     json[threads - 1] = ReadAll(out);
     EXPECT_NE(json[threads - 1].find("\"bench\":\"step\",\"particles\":600,"), std::string::npos)
         << json[threads - 1];
