@@ -27,8 +27,16 @@ TableWrench::TableWrench(const Scene& scene)
     try {
       table_.Query(material_, bite_depth_mm_, pass, 0.0);
     } catch (const OutOfTableDomain& e) {
-      throw InputError(std::string(e.what()) + " (asked by " + scene.path +
-                       ": bed.material, dig.bite_depth, dig.passes with arm.wrench: table)");
+      // The scene's key that asked for it.
+      const auto& m = table_.materials();
+      const auto& p = table_.passes();
+      const char* key = "dig.bite_depth";
+      if (std::find(m.begin(), m.end(), material_) == m.end()) {
+        key = "bed.material";
+      } else if (std::find(p.begin(), p.end(), pass) == p.end()) {
+        key = "dig.passes";
+      }
+      throw InputError(scene.path + ": " + key + " (arm.wrench: table): " + e.what());
     }
   }
 }
