@@ -893,8 +893,8 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
   if (wrench == "table") {
     a.table_driven = true;
     if (!m.Has("table"))
-      Fail(file, LineOf(node), "arm.table", "the wrench table file (TABLE.h5) with arm.wrench: table",
-           "nothing");
+      Fail(file, LineOf(node), "arm.table",
+           "the wrench table file (TABLE.h5) with arm.wrench: table", "nothing");
     a.table = ResolveAgainst(file, m.String("table", "the path of a wrench table (TABLE.h5)"));
     if (!std::filesystem::is_regular_file(a.table))
       Fail(file, LineOf(node["table"]), "arm.table",

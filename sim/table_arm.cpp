@@ -52,15 +52,14 @@ void TableWrench::BeginPass(int pass) {
   const auto& materials = table_.materials();
   const int m = static_cast<int>(std::find(materials.begin(), materials.end(), material_) -
                                  materials.begin());
-  const int p = static_cast<int>(
-      std::find(table_.passes().begin(), table_.passes().end(), pass) - table_.passes().begin());
+  const int p = static_cast<int>(std::find(table_.passes().begin(), table_.passes().end(), pass) -
+                                 table_.passes().begin());
   const std::vector<double>& depths = table_.bite_depths();
   for (size_t b = 0; b < depths.size(); ++b) {
-    const bool below_next = b + 1 < depths.size() && depths[b] < bite_depth_ &&
-                            bite_depth_ < depths[b + 1];
+    const bool below_next =
+        b + 1 < depths.size() && depths[b] < bite_depth_ && bite_depth_ < depths[b + 1];
     const bool at = std::abs(depths[b] - bite_depth_) <= 1e-12;
-    const bool above_previous =
-        b > 0 && depths[b - 1] < bite_depth_ && bite_depth_ < depths[b];
+    const bool above_previous = b > 0 && depths[b - 1] < bite_depth_ && bite_depth_ < depths[b];
     if (at || below_next || above_previous)
       rho_end_ = std::min(rho_end_, table_.RhoEnd(m, static_cast<int>(b), p));
   }
@@ -85,10 +84,10 @@ dem::MeshWrench TableWrench::At(const dem::Pose& pose) {
   // Material, bite depth and pass were checked at construction: with clamp, Query cannot throw.
   scoop_wrench_ = table_.Query(material_, bite_depth_mm_, pass_, rho_ * 1e3, /*clamp=*/true);
   // l_scoop axes about the CoM -> world axes about the l_scoop origin.
-  const dem::Vec3 force = dem::Rotate(pose.orientation, {scoop_wrench_[0], scoop_wrench_[1],
-                                                         scoop_wrench_[2]});
-  const dem::Vec3 torque_com = dem::Rotate(pose.orientation, {scoop_wrench_[3], scoop_wrench_[4],
-                                                              scoop_wrench_[5]});
+  const dem::Vec3 force =
+      dem::Rotate(pose.orientation, {scoop_wrench_[0], scoop_wrench_[1], scoop_wrench_[2]});
+  const dem::Vec3 torque_com =
+      dem::Rotate(pose.orientation, {scoop_wrench_[3], scoop_wrench_[4], scoop_wrench_[5]});
   w.force = force;
   w.torque = torque_com + dem::Cross(com_ - pose.position, force);
   w.contacts = 1;
@@ -179,8 +178,8 @@ TableArmResult RunTableArm(const Scene& scene, const RunOptions& options) {
   Status(
       "scoopsim: table-driven arm: %.4g s simulated in %.3g s wall: %.3g x real time (%lld Bullet "
       "steps of %.3g s, %.3g us each); %lld steps past the table's rho held its last value\n",
-      result.simulated, result.wall, result.RealTimeFactor(),
-      static_cast<long long>(result.steps), h, 1e6 * result.wall / std::max<int64_t>(1, result.steps),
+      result.simulated, result.wall, result.RealTimeFactor(), static_cast<long long>(result.steps),
+      h, 1e6 * result.wall / std::max<int64_t>(1, result.steps),
       static_cast<long long>(source.held_steps()));
   if (out) {
     out->SetAttribute("real_time_factor", result.RealTimeFactor());

@@ -62,7 +62,7 @@ class TableWrench {
   double rho() const { return rho_; }  // [m]
   // The last wrench in the table's frame: l_scoop axes, about the CoM [N], [N m].
   const std::array<double, 6>& scoop_wrench() const { return scoop_wrench_; }
-  const dem::Vec3& com() const { return com_; }  // CoM of the last pose, world [m]
+  const dem::Vec3& com() const { return com_; }       // CoM of the last pose, world [m]
   int64_t held_steps() const { return held_steps_; }  // steps with rho past the pass's data
   const WrenchTable& table() const { return table_; }
 
@@ -75,10 +75,10 @@ class TableWrench {
   dem::Vec3 trench_;                     // unit digging direction, world
   const dem::TriangleMesh* mesh_;        // the scoop, l_scoop coordinates
   int pass_ = 0;
-  double floor_ = 0;                     // z of first contact in this pass [m]
+  double floor_ = 0;  // z of first contact in this pass [m]
   bool touched_ = false;
-  double along0_ = 0, rho_ = 0;          // CoM along the trench at first contact; rho [m]
-  double rho_end_ = 0;                   // end of this pass's data (the slower of the cells) [m]
+  double along0_ = 0, rho_ = 0;  // CoM along the trench at first contact; rho [m]
+  double rho_end_ = 0;           // end of this pass's data (the slower of the cells) [m]
   dem::Vec3 com_;
   std::array<double, 6> scoop_wrench_{};
   int64_t held_steps_ = 0;

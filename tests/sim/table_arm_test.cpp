@@ -8,8 +8,9 @@
 //     lander's URDF with its joint friction set to 0 (a joint held by Coulomb friction takes up
 //     any change below its friction, 0.3-4.6 N m, so its demanded torque need not change);
 //   - rho: on a 0.05 m push it is the running maximum of the CoM's travel along the trench since
-//     first contact (at each row, within 1 um above the maximum over the rows), ends within 2 mm of 0.05 m, and the wrench applied
-//     is the table's at that rho (a wrench linear in rho: to 1e-9 relative);
+//     first contact (at each row, within 1 um above the maximum over the rows), ends within 2 mm of
+//     0.05 m, and the wrench applied is the table's at that rho (a wrench linear in rho: to 1e-9
+//     relative);
 //   - a table wrench past a joint's capacity raises JOINT_TORQUE_LIMIT on the joint that the
 //     Jacobian says needs the largest share of its effort (the others stay under 90% of theirs);
 //   - out of the domain: a bite depth outside the table's, a material or a pass it does not hold,
@@ -149,7 +150,8 @@ struct TableRun {
 };
 
 TableRun RunTable(const std::string& name, const std::string& scene_text, int threads = 1) {
-  TableRun r{sim::LoadScene(WriteScene(name, scene_text)), (TempDir() / (name + ".h5")).string(), {}};
+  TableRun r{
+      sim::LoadScene(WriteScene(name, scene_text)), (TempDir() / (name + ".h5")).string(), {}};
   sim::RunOptions options;
   options.output = r.output;
   options.quiet = true;
@@ -173,9 +175,9 @@ Eigen::Isometry3d Base(const std::string& path) {
   Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
   base.linear() =
       Eigen::AngleAxisd(RootAttribute(path, "arm_base_yaw"), Eigen::Vector3d::UnitZ()).matrix();
-  base.translation() = Eigen::Vector3d(RootAttribute(path, "arm_base_x"),
-                                       RootAttribute(path, "arm_base_y"),
-                                       RootAttribute(path, "arm_base_z"));
+  base.translation() =
+      Eigen::Vector3d(RootAttribute(path, "arm_base_x"), RootAttribute(path, "arm_base_y"),
+                      RootAttribute(path, "arm_base_z"));
   return base;
 }
 
@@ -346,9 +348,8 @@ TEST(TableArm, OutOfDomainInputsAreRefusedBeforeTheRunWithOneLineAndExit2) {
   for (const Case& c : cases) {
     const std::string scene = WriteScene("bad_" + c.name, c.text);
     const std::string err = (TempDir() / ("bad_" + c.name + ".err")).string();
-    EXPECT_EQ(scoopsim_test::RunScoopsim("run " + scene + " -o " +
-                                             (TempDir() / "bad.h5").string() + " --quiet",
-                                         err),
+    EXPECT_EQ(scoopsim_test::RunScoopsim(
+                  "run " + scene + " -o " + (TempDir() / "bad.h5").string() + " --quiet", err),
               2)
         << c.name;
     std::ifstream in(err);
