@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "sim/arm_driver.h"
+#include "sim/table_arm.h"
 #include "sim/bed.h"
 #include "sim/bed_io.h"
 #include "sim/exit_status.h"
@@ -63,6 +64,8 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
 }
 
 int RunScene(const Scene& scene, const RunOptions& options) {
+  // The arm on a wrench table: no bed, no DEM (sim/table_arm.h).
+  if (scene.arm.table_driven) return RunTableArm(scene, options).exit_status;
   InstallStopHandlers();
   World world(scene, options.threads);
   if (!scene.bed.file.empty()) {

@@ -737,7 +737,7 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
   a.enabled = true;
   const MapReader m(file, node, "arm",
                     {"urdf", "base", "initial", "gains", "derate", "substeps", "timing",
-                     "velocity_margin", "faults"});
+                     "velocity_margin", "faults", "wrench", "table"});
   const std::string urdf_name =
       m.Has("urdf") ? m.String("urdf", "the path of a URDF file") : "../assets/lander_arm.urdf";
   a.urdf = ResolveAgainst(file, urdf_name);
@@ -887,6 +887,23 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
     }
   } else if (model->JointIndex(a.sensor_joint) < 0) {
     a.sensor_joint.clear();  // another arm without the lander's sensor joint: no F/T monitoring
+  }
+  // The scoop's wrench: the DEM's (default) or a wrench table's (sim/table_arm.h).
+  const std::string wrench = m.Has("wrench") ? m.String("wrench", "dem or table") : "dem";
+  if (wrench == "table") {
+    a.table_driven = true;
+    if (!m.Has("table"))
+      Fail(file, LineOf(node), "arm.table",
+           "the wrench table file (TABLE.h5) with arm.wrench: table", "nothing");
+    a.table = ResolveAgainst(file, m.String("table", "the path of a wrench table (TABLE.h5)"));
+    if (!std::filesystem::is_regular_file(a.table))
+      Fail(file, LineOf(node["table"]), "arm.table",
+           "an existing wrench table (scoopsim table build DIR -o TABLE.h5)", a.table);
+  } else if (wrench != "dem") {
+    Fail(file, LineOf(node["wrench"]), "arm.wrench", "dem or table", wrench);
+  } else if (m.Has("table")) {
+    Fail(file, LineOf(node["table"]), "arm.table", "a table only with arm.wrench: table",
+         m.String("table", "a path"));
   }
 }
 
@@ -1302,6 +1319,11 @@ Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
   if (top.Has("obstacles"))
     ParseObstacles(path, root["obstacles"], scene.wall_material, bed_material, &scene);
   if (top.Has("arm")) ParseArm(path, root["arm"], &scene);
+  if (scene.arm.table_driven && !(scene.dig.enabled && scene.dig.surface_given)) {
+    Fail(path, LineOf(root["dig"] ? root["dig"] : root["arm"]["wrench"]), "dig.surface",
+         "the bed's surface height as a number (m) with arm.wrench: table (no bed is made)",
+         scene.dig.enabled ? "auto" : "no dig: block");
+  }
 
   // Derived time step and default skin.
   DeriveFromBed(&scene);

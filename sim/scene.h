@@ -177,6 +177,10 @@ struct ArmSpec {
   dem::Vec3 retract_direction{0, 0, 1};  // world, unit
   double retract_distance = 0.05;        // [m]
   double retract_speed = 0.02;           // [m/s]
+  // Where the scoop's wrench comes from: the DEM (arm.wrench: dem, the default) or a wrench table
+  // (arm.wrench: table, arm.table: TABLE.h5): no bed at all, see sim/table_arm.h.
+  bool table_driven = false;
+  std::string table;  // the table file, resolved against the scene's folder
 };
 
 struct Scene {

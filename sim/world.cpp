@@ -475,7 +475,8 @@ RunResult World::Run(const RunControl& control) {
            summary_.simulated, summary_.peak_force, summary_.mean_force, summary_.peak_torque,
            static_cast<long long>(system.neighbor_stats().builds),
            static_cast<double>(particle_steps_) / std::max<int64_t>(1, summary_.steps));
-    Status("scoopsim: dig: %.1f s wall: %s\n", result.wall,
+    Status("scoopsim: dig: %.1f s wall (%.3g x real time): %s\n", result.wall,
+           summary_.simulated / std::max(result.wall, 1e-9),
            PhaseBreakdown(PhasesSince(system.phase_times(), phases0), result.wall).c_str());
     try {
       dig_->driver->Finish(out_);  // the driver's own summary (the arm's table)
