@@ -1,11 +1,14 @@
 #include "sim/commands.h"
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 
@@ -14,6 +17,7 @@
 #include "sim/bed_io.h"
 #include "sim/exit_status.h"
 #include "sim/h5_output.h"
+#include "sim/internal_h5.h"
 #include "sim/progress.h"
 #include "sim/world.h"
 
@@ -45,9 +49,43 @@ double PeakRssMb() {
 
 }  // namespace
 
+std::string PourPath(const std::string& output) {
+  return std::filesystem::path(output).replace_extension(".pour.h5").string();
+}
+
+void CheckWritable(const std::string& path) {
+  h5::MakeParentFolders(path);
+  // A file of our own beside it, created and removed: the folder takes new files.
+  const std::string probe = path + "." + std::to_string(::getpid()) + ".probe";
+  std::FILE* f = std::fopen(probe.c_str(), "wb");
+  if (f == nullptr) {
+    throw InputError(path + ": cannot write there: " + std::strerror(errno));
+  }
+  std::fclose(f);
+  std::error_code ignored;
+  std::filesystem::remove(probe, ignored);
+}
+
+void RefuseOutputOverInput(const std::string& output, const std::string& input,
+                           const std::string& what) {
+  namespace fs = std::filesystem;
+  if (input.empty()) return;
+  std::error_code ec;
+  const bool same = fs::exists(output, ec) && fs::exists(input, ec)
+                        ? fs::equivalent(output, input, ec)
+                        : fs::weakly_canonical(output, ec) == fs::weakly_canonical(input, ec);
+  if (same) {
+    throw InputError(output + ": -o names the run's own input (" + what + " = " + input +
+                     "); give another output file");
+  }
+}
+
 int MakeBed(const Scene& scene, const RunOptions& options) {
   InstallStopHandlers();
+  // The output's folder is made and checked for writing before any work.
+  CheckWritable(options.output);
   World world(scene, options.threads);
+  world.KeepPour(PourPath(options.output));
   const auto wall0 = std::chrono::steady_clock::now();
   SettleReport r;
   const int status = world.Pour(options.quiet, &r);
@@ -64,7 +102,12 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
 
 int RunScene(const Scene& scene, const RunOptions& options) {
   InstallStopHandlers();
+  // The output first, before any work: refused when it is the run's own input bed or another
+  // process writes it (locked from here to the end).
+  RefuseOutputOverInput(options.output, scene.bed.file, scene.path + ": bed.file");
   World world(scene, options.threads);
+  world.OpenOutput(options.output);
+  world.KeepPour(PourPath(options.output));
   if (!scene.bed.file.empty()) {
     world.LoadBed(scene.bed.file);  // already resolved against the scene's folder
   } else {
@@ -72,7 +115,6 @@ int RunScene(const Scene& scene, const RunOptions& options) {
     const int status = world.Pour(options.quiet, &r);
     if (status != kExitOk) return status;
   }
-  world.OpenOutput(options.output);
   // The scoop on the arm (Bullet, coupled every step) when the scene has an arm, else on its path.
   if (scene.dig.enabled)
     world.StartDig(scene.arm.enabled ? std::unique_ptr<ScoopDriver>(new ArmDriver(scene))

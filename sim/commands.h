@@ -25,6 +25,17 @@ struct RunOptions {
   DigSummary* dig_summary = nullptr;  // filled by a dig run when set
 };
 
+// Where a command that pours keeps the bed poured so far (World::KeepPour): OUT.h5 -> OUT.pour.h5.
+std::string PourPath(const std::string& output);
+// Creates the parent folders of `path` and checks a file can be created there; throws
+// sim::InputError naming the path and the reason.
+void CheckWritable(const std::string& path);
+
+// Throws sim::InputError when `output` is the file `input` (the same file by any path; "" never
+// is): a run must not overwrite its own input. `what` names the input ("scenes/x.yaml: bed.file").
+void RefuseOutputOverInput(const std::string& output, const std::string& input,
+                           const std::string& what);
+
 // `scoopsim bed SCENE -o BED.h5`: fill the scene's box, settle, save the bed.
 int MakeBed(const Scene& scene, const RunOptions& options);
 

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <stdexcept>
 
 #include "sim/bed_io.h"
@@ -65,19 +66,50 @@ void World::LoadState(const std::string& path) {
   sleep_applied_ = true;
 }
 
+void World::KeepPour(const std::string& path) { pour_file_ = path; }
+
 int World::Pour(bool quiet, SettleReport* report) {
+  namespace fs = std::filesystem;
+  // A pour this scene left unfinished in the keep file goes on from there.
+  PourPoint point;
+  if (!pour_file_.empty() && ReadPourPoint(pour_file_, scene_.yaml_text, &point)) {
+    sim::LoadBed(pour_file_, system_.get());
+    system_->Canonicalize();
+    Status("scoopsim: the pour goes on from %s: %lld of %lld bodies poured (layer %d)\n",
+           pour_file_.c_str(), static_cast<long long>(point.poured),
+           static_cast<long long>(scene_.bed.count), point.layers);
+  }
   Progress progress("bed", scene_.bed.settle_max_time, quiet);
   progress.set_open_ended(true);  // settling ends when the bed is at rest, often well before
   const double t0 = system_->time();
   auto particle_steps = [&] {
     return system_->step_count() * static_cast<int64_t>(system_->particles().size());
   };
+  // The bed so far goes to the keep file every output.flush_seconds and when stopped.
+  auto last_keep = std::chrono::steady_clock::now();
+  auto keep = [&] {
+    SaveBed(pour_file_, *system_, scene_.yaml_text, &point);
+    last_keep = std::chrono::steady_clock::now();
+  };
   SettleReport& r = *report;
-  r = FillAndSettle(scene_, system_.get(), [&](const dem::System& s) {
-    progress.Update(s.time() - t0, particle_steps());
-    return !StopRequested();
-  });
+  r = FillAndSettle(
+      scene_, system_.get(),
+      [&](const dem::System& s) {
+        progress.Update(s.time() - t0, particle_steps());
+        if (!pour_file_.empty() && point.started && !StopRequested() &&
+            Seconds(std::chrono::steady_clock::now() - last_keep) >= scene_.output.flush_seconds)
+          keep();
+        return !StopRequested();
+      },
+      &point);
   progress.Finish(system_->time() - t0, particle_steps());
+  if (!pour_file_.empty() && StopRequested() && point.started && r.status.ok()) {
+    keep();
+    Status("scoopsim: the bed poured so far (%lld of %lld bodies) is in %s; the same command goes "
+           "on from it\n",
+           static_cast<long long>(point.poured), static_cast<long long>(scene_.bed.count),
+           pour_file_.c_str());
+  }
   int status = kExitOk;
   if (!r.status.ok()) {
     Status("scoopsim: simulation unstable: %s\n", r.status.message.c_str());
@@ -98,6 +130,11 @@ int World::Pour(bool quiet, SettleReport* report) {
   }
   // Storage and lists a function of positions and ids alone, ready to save or run.
   system_->Canonicalize();
+  if (!pour_file_.empty()) {
+    std::error_code ignored;
+    fs::remove(pour_file_, ignored);  // finished: nothing to go on from
+    fs::remove(fs::path(pour_file_).replace_extension(".xdmf"), ignored);
+  }
   return status;
 }
 
@@ -291,7 +328,9 @@ dem::StepStatus OutputFailed(double time, const std::exception& e) {
   dem::StepStatus status;
   status.flags = kOutputFailed;
   status.time = time;
-  status.message = std::string("output failed: ") + e.what();
+  char at[64];
+  std::snprintf(at, sizeof at, "output failed at t = %.6g s: ", time);
+  status.message = at + std::string(e.what());
   return status;
 }
 
@@ -446,7 +485,15 @@ RunResult World::Run(const RunControl& control) {
     }
     const int64_t steps = system.step_count() - step0_;
     if (steps % 64 == 0) {
-      if (out_) out_->MaybeFlush();
+      if (out_) {
+        try {
+          out_->MaybeFlush();
+        } catch (const std::exception& e) {
+          Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+          result.exit_status = kExitFailure;
+          break;
+        }
+      }
       progress.Update(system.time() - t_start_, particle_steps_);
       if (StopRequested()) {
         Status("scoopsim: stopped by signal %d at t = %.6g s; output closed\n", StopSignal(),
@@ -478,18 +525,29 @@ RunResult World::Run(const RunControl& control) {
     Status("scoopsim: dig: %.1f s wall: %s\n", result.wall,
            PhaseBreakdown(PhasesSince(system.phase_times(), phases0), result.wall).c_str());
     try {
-      dig_->driver->Finish(out_);  // the driver's own summary (the arm's table)
+      dig_->driver->Finish(out_ != nullptr && !out_->failed() ? out_ : nullptr);
     } catch (const std::exception& e) {
       Status("scoopsim: output failed: %s\n", e.what());
       result.exit_status = kExitFailure;
     }
   }
   if (owned_out_) {
-    owned_out_->SetStateHash(system.StateHash());
-    owned_out_->SetAttribute("time", system.time());
-    owned_out_->Close();
-    Status("scoopsim: wrote %s (ParaView: %s)\n", owned_out_->path().c_str(),
-           owned_out_->xdmf_path().c_str());
+    // After a failed write the file keeps its last flush (the message said so): only close it.
+    try {
+      if (!owned_out_->failed()) {
+        owned_out_->SetStateHash(system.StateHash());
+        owned_out_->SetAttribute("time", system.time());
+      }
+      const bool failed = owned_out_->failed();
+      owned_out_->Close();
+      if (!failed) {
+        Status("scoopsim: wrote %s (ParaView: %s)\n", owned_out_->path().c_str(),
+               owned_out_->xdmf_path().c_str());
+      }
+    } catch (const std::exception& e) {
+      if (result.exit_status != kExitFailure) Status("scoopsim: output failed: %s\n", e.what());
+      result.exit_status = kExitFailure;
+    }
   }
   return result;
 }

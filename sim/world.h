@@ -90,6 +90,10 @@ class World {
   // flags, then the storage made canonical, so a plain run continues it with no further rebuild.
   void LoadState(const std::string& path);
   int Pour(bool quiet, SettleReport* report);
+  // Pour() keeps the bed poured so far in `path` (a saved bed with its sim::PourPoint) every
+  // output.flush_seconds of wall time and when stopped by a signal, goes on from it when it holds
+  // an unfinished pour of this scene, and removes it once the pour has ended.
+  void KeepPour(const std::string& path);
 
   // Outputs: a file of its own (created now), or a shared one (a study's groups).
   void OpenOutput(const std::string& path);
@@ -149,6 +153,7 @@ class World {
   std::vector<int> obstacle_meshes_;      // mesh indices of scene.obstacles
   const RunControl* control_ = nullptr;  // during Run(): its on_pass_end
   int halted_after_pass_ = 0;            // on_pass_end returned false after this pass
+  std::string pour_file_;                // KeepPour
 };
 
 }  // namespace sim

@@ -47,12 +47,6 @@ std::string OneLine(std::string message) {
   return message;
 }
 
-// Creates the folder an output file goes into (nothing to do for a bare file name).
-void MakeParentDirectories(const std::string& output) {
-  const std::filesystem::path parent = std::filesystem::path(output).parent_path();
-  if (!parent.empty()) std::filesystem::create_directories(parent);
-}
-
 // Options shared by `bed` and `run`.
 struct SceneCommand {
   std::string scene;
@@ -277,12 +271,10 @@ int Main(int argc, char** argv) {
   try {
     if (*bed) {
       const sim::Scene scene = sim::LoadScene(bed_args.scene);
-      MakeParentDirectories(bed_args.output);
       return sim::MakeBed(scene, bed_args.Options(scene));
     }
     if (*run) {
       const sim::Scene scene = sim::LoadScene(run_args.scene);
-      MakeParentDirectories(run_args.output);
       sim::RunOptions options = run_args.Options(scene);
       options.stop_after = run_stop_after;
       std::unique_ptr<render::FrameSequence> frames;
@@ -317,7 +309,6 @@ int Main(int argc, char** argv) {
     }
     if (*shape) {
       const sim::Scene scene = sim::LoadScene(shape_args.scene);
-      MakeParentDirectories(shape_args.output);
       const sim::RunOptions run = shape_args.Options(scene);
       sim::ShapeStudyOptions options;
       options.threads = run.threads;
