@@ -529,6 +529,77 @@ struct H5Output::Impl {
     s.pending.clear();
   }
 
+  // Takes from the file now at `path` the first cursor.rows of each series (buffered, written at
+  // the next flush) and the first cursor.snapshot_time.size() snapshots (a run resumed from its
+  // checkpoint). Copied value by value: H5Ocopy into a file in SWMR mode fails in HDF5 1.10.
+  void CopyUpTo(const OutputCursor& cursor) {
+    const h5::Handle old = h5::OpenForReading(path, false);
+    const h5::Reader in(path, old.get());
+    auto width_of = [&](const std::string& name) -> hsize_t {
+      if (!in.Exists(name)) in.Fail(name, "missing; cannot resume from this file");
+      const h5::Handle d(h5::CheckId(H5Dopen2(old.get(), name.c_str(), H5P_DEFAULT), name),
+                         H5Dclose);
+      const h5::Handle space(h5::CheckId(H5Dget_space(d.get()), name), H5Sclose);
+      hsize_t dims[2] = {0, 1};
+      return H5Sget_simple_extent_dims(space.get(), dims, nullptr) == 2 ? dims[1] : 1;
+    };
+    for (const auto& [name, rows] : cursor.rows) {
+      const hsize_t width = width_of(name);
+      int64_t n = 0;
+      const std::vector<double> values =
+          in.Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, width, &n);
+      if (n < rows)
+        in.Fail(name, "holds " + std::to_string(n) + " rows, its checkpoint " +
+                          std::to_string(rows) + "; cannot resume from this file");
+      Series& s = GetSeries(name, static_cast<int>(width));
+      s.pending.assign(values.begin(), values.begin() + rows * static_cast<int64_t>(width));
+    }
+    struct Field {
+      const char* name;
+      hid_t file_type, memory_type;
+      hsize_t width;
+    };
+    const Field fields[] = {{"id", H5T_STD_I64LE, H5T_NATIVE_INT64, 1},
+                            {"connectivity", H5T_STD_I64LE, H5T_NATIVE_INT64, 1},
+                            {"position", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
+                            {"velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
+                            {"angular_velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
+                            {"radius", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                            {"speed", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                            {"material", H5T_STD_I32LE, H5T_NATIVE_INT32, 1},
+                            {"awake", H5T_STD_I32LE, H5T_NATIVE_INT32, 1}};
+    h5::Handle lcpl(h5::CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
+    h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1),
+                "H5Pset_create_intermediate_group");
+    for (size_t k = 0; k < cursor.snapshot_time.size(); ++k) {
+      const std::string group_name = h5::SnapshotGroupName(static_cast<int64_t>(k));
+      const int64_t count = cursor.snapshot_count[k];
+      const h5::Handle group(
+          h5::CheckId(H5Gcreate2(file.get(), group_name.c_str(), lcpl.get(), H5P_DEFAULT,
+                                 H5P_DEFAULT),
+                      "H5Gcreate2 " + group_name),
+          H5Gclose);
+      h5::WriteDoubleAttribute(group.get(), "time", cursor.snapshot_time[k]);
+      for (const Field& f : fields) {
+        const std::string name = group_name + "/" + f.name;
+        if (f.memory_type == H5T_NATIVE_DOUBLE) {
+          const std::vector<double> v =
+              in.Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, count, f.width);
+          h5::WriteArray(group.get(), f.name, f.file_type, f.memory_type, v.data(), count, f.width);
+        } else if (f.memory_type == H5T_NATIVE_INT64) {
+          const std::vector<int64_t> v =
+              in.Read<int64_t>(name, H5T_INTEGER, H5T_NATIVE_INT64, count, f.width);
+          h5::WriteArray(group.get(), f.name, f.file_type, f.memory_type, v.data(), count, f.width);
+        } else {
+          const std::vector<int32_t> v =
+              in.Read<int32_t>(name, H5T_INTEGER, H5T_NATIVE_INT32, count, f.width);
+          h5::WriteArray(group.get(), f.name, f.file_type, f.memory_type, v.data(), count, f.width);
+        }
+      }
+      snapshots.push_back({group_name, cursor.snapshot_time[k], count});
+    }
+  }
+
   void WriteAllRows() {
     for (auto& [name, s] : series) WriteRows(name, s);
   }
@@ -578,7 +649,7 @@ int PutInPlace(const std::string& temporary, const std::string& path) {
 }  // namespace
 
 H5Output::H5Output(const std::string& path, const std::string& scene_yaml,
-                   const std::string& version, double flush_seconds)
+                   const std::string& version, double flush_seconds, const OutputCursor* resume)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.path = path;
@@ -593,11 +664,13 @@ H5Output::H5Output(const std::string& path, const std::string& scene_yaml,
         h5::Handle(h5::CheckId(H5Gopen2(m.file.get(), "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);
     h5::WriteStringAttribute(m.root.get(), "scene_yaml", scene_yaml);
     h5::WriteStringAttribute(m.root.get(), "version", version);
+    if (resume != nullptr) m.CopyUpTo(*resume);
     Flush();  // a valid file from the start, even if the run is killed before its first flush
     m.lock_fd = ::open(temporary.c_str(), O_RDWR | O_CLOEXEC);
     if (m.lock_fd < 0 || !LockFile(m.lock_fd))
       throw InputError(temporary + ": cannot lock the new output file");
     m.old_lock_fd = PutInPlace(temporary, path);
+    if (!m.snapshots.empty()) h5::WriteXdmf(m.path, m.snapshots);
   } catch (...) {
     m.root.reset();
     m.file.reset();
@@ -738,6 +811,18 @@ void H5Output::Close() {
 }
 
 bool H5Output::failed() const { return !impl_->failure.empty(); }
+
+OutputCursor H5Output::Cursor() {
+  Flush();
+  OutputCursor c;
+  for (const auto& [name, s] : impl_->series)
+    c.rows.emplace_back(name, static_cast<int64_t>(s.rows_flushed));
+  for (const h5::SnapshotEntry& e : impl_->snapshots) {
+    c.snapshot_time.push_back(e.time);
+    c.snapshot_count.push_back(e.count);
+  }
+  return c;
+}
 void H5Output::set_flush_seconds(double seconds) { impl_->flush_seconds = seconds; }
 double H5Output::flush_seconds() const { return impl_->flush_seconds; }
 bool H5Output::is_open() const { return impl_->file.valid(); }

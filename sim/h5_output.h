@@ -31,6 +31,8 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "dem/system.h"
 
@@ -42,13 +44,23 @@ class OutputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Where an output stands after a flush: the rows of each series and the snapshots (a run's
+// checkpoint keeps it; a resumed run's output is made again up to it).
+struct OutputCursor {
+  std::vector<std::pair<std::string, int64_t>> rows;  // dataset path, rows
+  std::vector<double> snapshot_time;                  // [s], one per snapshot
+  std::vector<int64_t> snapshot_count;                // particles of each
+};
+
 class H5Output {
  public:
-  // Creates (truncates) `path` and its parent folders and writes the root attributes.
-  // Throws sim::InputError naming the path when the file cannot be created or another process
-  // writes it (the lock is held until Close()).
+  // Creates (truncates) `path` and its parent folders and writes the root attributes. With
+  // `resume`, the new file first takes from the file now at `path` the rows and snapshots the
+  // cursor names (InputError when that file holds fewer). Throws sim::InputError naming the path
+  // when the file cannot be created or another process writes it (the lock is held until
+  // Close()).
   H5Output(const std::string& path, const std::string& scene_yaml, const std::string& version,
-           double flush_seconds = 10.0);
+           double flush_seconds = 10.0, const OutputCursor* resume = nullptr);
   ~H5Output();  // Close(); errors are swallowed (call Close() to see them)
   H5Output(const H5Output&) = delete;
   H5Output& operator=(const H5Output&) = delete;
@@ -82,6 +94,8 @@ class H5Output {
   void Close();
   // A write failed (OutputError was thrown): nothing more is written.
   bool failed() const;
+  // Flush()es and says where the file stands.
+  OutputCursor Cursor();
 
   void set_flush_seconds(double seconds);
   double flush_seconds() const;

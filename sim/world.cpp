@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "dem/archive.h"
 #include "sim/bed_io.h"
 #include "sim/exit_status.h"
 #include "sim/progress.h"
@@ -138,10 +139,77 @@ int World::Pour(bool quiet, SettleReport* report) {
   return status;
 }
 
-void World::OpenOutput(const std::string& path) {
+void World::OpenOutput(const std::string& path, const OutputCursor* resume) {
   owned_out_ = std::make_unique<H5Output>(path, scene_.yaml_text, SCOOPSIM_VERSION,
-                                          scene_.output.flush_seconds);
+                                          scene_.output.flush_seconds, resume);
   out_ = owned_out_.get();
+}
+
+template <typename Archive>
+void World::LoopFields(Archive& a) {
+  a(started_);
+  a(sleep_applied_);
+  a(t_start_);
+  a(next_row_);
+  a(step0_);
+  a(particle_steps_);
+  a(summary_.peak_force);
+  a(summary_.mean_force);
+  a(summary_.peak_torque);
+  a(summary_.peak_overlap);
+  a(summary_.collected_mass);
+  a(summary_.particles);
+  a(summary_.steps);
+  a(summary_.simulated);
+  if (!dig_) return;
+  Dig& d = *dig_;
+  a(d.pass_t0);
+  a(d.next_row);
+  a(d.touched);
+  a(d.com_contact);
+  a(d.rho);
+  a(d.wrench);
+  a(d.force_sum);
+  a(d.force_rows);
+  a(d.planned);
+  a(d.bed.start_time);
+}
+
+Checkpoint World::MakeCheckpoint() {
+  Checkpoint c;
+  c.scene_path = scene_.path;
+  c.scene_yaml = scene_.yaml_text;
+  c.time = system_->time();
+  if (out_) c.output_state = EncodeCursor(out_->Cursor());
+  c.dem_state = system_->SaveState();
+  dem::ArchiveWriter a;
+  const uint8_t dig = dig_ != nullptr;
+  const DigResume at = dig ? ResumePoint() : DigResume{};
+  a(dig);
+  a(at);
+  LoopFields(a);
+  c.world_state = a.bytes();
+  return c;
+}
+
+void World::ResumeFrom(const Checkpoint& c, std::unique_ptr<ScoopDriver> driver,
+                       const std::string& source) {
+  try {
+    dem::ArchiveReader a(c.world_state);
+    uint8_t dig = 0;
+    DigResume at;
+    a(dig);
+    a(at);
+    if ((dig != 0) != (driver != nullptr))
+      throw std::runtime_error(dig ? "a dig's checkpoint, the scene has none"
+                                   : "a plain run's checkpoint, the scene has a dig");
+    if (dig) StartDig(std::move(driver), &at);
+    system_->RestoreState(c.dem_state);
+    LoopFields(a);
+    if (!a.done()) throw std::runtime_error("/world_state: bytes left over");
+  } catch (const std::runtime_error& e) {
+    throw InputError(source + ": " + e.what());
+  }
 }
 
 void World::UseOutput(H5Output* out) {
@@ -462,6 +530,7 @@ RunResult World::Run(const RunControl& control) {
 
   RunResult result;
   control_ = &control;
+  auto last_checkpoint = std::chrono::steady_clock::now();
   if (halted_after_pass_ > 0) {  // an earlier Run() stopped between passes: go on
     halted_after_pass_ = 0;
     if (!Done()) BeginPass();
@@ -495,7 +564,25 @@ RunResult World::Run(const RunControl& control) {
         }
       }
       progress.Update(system.time() - t_start_, particle_steps_);
+      if (control.checkpoint_every > 0 &&
+          Seconds(std::chrono::steady_clock::now() - last_checkpoint) >= control.checkpoint_every) {
+        try {
+          WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+        } catch (const std::exception& e) {
+          Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+          result.exit_status = kExitFailure;
+          break;
+        }
+        last_checkpoint = std::chrono::steady_clock::now();
+      }
       if (StopRequested()) {
+        if (control.checkpoint_every > 0) {  // go on from here, not from the last checkpoint
+          try {
+            WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+          } catch (const std::exception& e) {
+            Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+          }
+        }
         Status("scoopsim: stopped by signal %d at t = %.6g s; output closed\n", StopSignal(),
                system.time());
         result.exit_status = kExitStopped;

@@ -27,17 +27,12 @@
 namespace {
 
 namespace fs = std::filesystem;
+using scoopsim_test::ReadText;
+using scoopsim_test::Wait;
 
 fs::path TempDir() {
   static const fs::path dir = scoopsim_test::ProcessTempDir("run_output");
   return dir;
-}
-
-std::string ReadText(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 std::vector<std::string> Lines(const std::string& text) {
@@ -90,12 +85,6 @@ pid_t Spawn(std::vector<std::string> args, const std::string& stderr_file, rlim_
 }
 
 // Exit status, or 128 + signal.
-int Wait(pid_t pid) {
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
 void WaitForFile(const fs::path& path, pid_t pid) {
   for (int k = 0; k < 20000 && !fs::exists(path); ++k) {
     if (::waitpid(pid, nullptr, WNOHANG) == pid) FAIL() << "ended before writing " << path;
