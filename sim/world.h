@@ -153,7 +153,7 @@ class World {
   void EndPass();
   void AddObstacles();  // scene.obstacles as fixed meshes (at StartDig)
   WorldView View() const;
-  // Lists the loop's own state after the dig's pass, surface and clearance (WorldFields).
+  // Lists the loop's own state: counters, summaries and, in a dig, its pass bookkeeping.
   template <typename Archive>
   void LoopFields(Archive& archive);
 
