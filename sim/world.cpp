@@ -177,7 +177,9 @@ void World::LoopFields(Archive& a) {
 
 Checkpoint World::MakeCheckpoint() {
   Checkpoint c;
-  c.scene_path = scene_.path;
+  std::error_code ec;
+  const std::filesystem::path absolute = std::filesystem::absolute(scene_.path, ec);
+  c.scene_path = ec ? scene_.path : absolute.string();  // resumable from any folder
   c.scene_yaml = scene_.yaml_text;
   c.time = system_->time();
   if (out_) c.output_state = EncodeCursor(out_->Cursor());
