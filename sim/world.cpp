@@ -555,16 +555,18 @@ RunResult World::Run(const RunControl& control) {
       break;
     }
     const int64_t steps = system.step_count() - step0_;
-    if (steps % 64 == 0) {
-      if (out_) {
-        try {
-          out_->MaybeFlush();
-        } catch (const std::exception& e) {
-          Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
-          result.exit_status = kExitFailure;
-          break;
-        }
+    // Every step (a clock read): a killed run loses at most flush_seconds of rows, however long
+    // its steps take.
+    if (out_) {
+      try {
+        out_->MaybeFlush();
+      } catch (const std::exception& e) {
+        Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+        result.exit_status = kExitFailure;
+        break;
       }
+    }
+    if (steps % 64 == 0) {
       progress.Update(system.time() - t_start_, particle_steps_);
       if (control.checkpoint_every > 0 &&
           Seconds(std::chrono::steady_clock::now() - last_checkpoint) >= control.checkpoint_every) {
