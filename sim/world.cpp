@@ -533,11 +533,20 @@ RunResult World::Run(const RunControl& control) {
   RunResult result;
   control_ = &control;
   auto last_checkpoint = std::chrono::steady_clock::now();
+  if (control.checkpoint_every > 0) {
+    // One at the start: a run killed before its first period (after a long pour, say) resumes.
+    try {
+      WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+    } catch (const std::exception& e) {
+      Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+      result.exit_status = kExitFailure;
+    }
+  }
   if (halted_after_pass_ > 0) {  // an earlier Run() stopped between passes: go on
     halted_after_pass_ = 0;
     if (!Done()) BeginPass();
   }
-  while (!Done()) {
+  while (!Done() && result.exit_status == kExitOk) {
     const dem::StepStatus status = Step();
     if (status.flags & kOutputFailed) {
       Status("scoopsim: %s\n", status.message.c_str());

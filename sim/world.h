@@ -57,8 +57,8 @@ struct RunControl {
   // stop the run at that point (RunResult::stopped_at_pass). It may throw: the run then stops as
   // for an output failure (exit status 1, the message printed).
   std::function<bool(int pass)> on_pass_end;
-  // Every checkpoint_every seconds of wall time (0: never), between steps, the output is flushed
-  // and the run's whole state written to checkpoint_path (sim/checkpoint.h).
+  // At the start and every checkpoint_every seconds of wall time (0: never), between steps, the
+  // output is flushed and the run's whole state written to checkpoint_path (sim/checkpoint.h).
   double checkpoint_every = 0;  // [s]
   std::string checkpoint_path;
 };

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -167,13 +168,22 @@ TEST_P(ResumeTest, KilledAndResumedRunEqualsTheUninterrupted) {
   const std::string log = (TempDir() / (tag + ".log")).string();
   ASSERT_EQ(Wait(Spawn("run " + scene + " -o " + reference + common, log)), 0) << ReadText(log);
 
-  // Killed a moment after its first checkpoint (every 0.2 s of wall time).
+  // Killed a moment after its second checkpoint (one at the start, then every 0.2 s of wall
+  // time; each replaces the file, a new inode).
   const pid_t pid = Spawn("run " + scene + " -o " + out + common + " --checkpoint-every 0.2", log);
-  for (int k = 0; k < 60000 && !fs::exists(restart); ++k) {
-    if (::waitpid(pid, nullptr, WNOHANG) == pid) FAIL() << "ended before a checkpoint";
+  auto inode = [&restart] {
+    struct stat st {};
+    return ::stat(restart.c_str(), &st) == 0 ? st.st_ino : ino_t{0};
+  };
+  ino_t first = 0;
+  for (int k = 0; k < 120000; ++k) {
+    const ino_t now = inode();
+    if (first == 0) first = now;
+    if (now != 0 && now != first) break;
+    if (::waitpid(pid, nullptr, WNOHANG) == pid) FAIL() << "ended before a second checkpoint";
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
   ::kill(pid, SIGKILL);
   ASSERT_EQ(Wait(pid), 128 + SIGKILL) << "ended before the kill: " << ReadText(log);
   ASSERT_TRUE(fs::exists(restart));
