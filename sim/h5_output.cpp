@@ -45,7 +45,10 @@ void MakeParentFolders(const std::string& path) {
   if (parent.empty()) return;
   std::error_code ec;
   fs::create_directories(parent, ec);
-  if (ec) throw InputError(path + ": cannot create the folder " + parent.string() + ": " + ec.message());
+  if (ec) {
+    throw InputError(path + ": cannot create the folder " + parent.string() + ": " +
+                     ec.message());
+  }
 }
 
 Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
