@@ -162,6 +162,23 @@ class ClumpSet {
   double PotentialEnergy(const Vec3& gravity) const;
   Vec3 Momentum() const;
 
+  // Lists the clumps' state and indices to `archive` (dem/archive.h; System::SaveState). The
+  // shapes are not among them: they are added again from their templates.
+  template <typename Archive>
+  void Fields(Archive& archive) {
+    Clumps& c = state_;
+    for (auto* v : {&c.shape, &c.material}) archive(*v);
+    archive(c.mass);
+    for (auto* v : {&c.inertia, &c.x, &c.v, &c.l, &c.f, &c.t}) archive(*v);
+    archive(c.q);
+    archive(c.asleep);
+    archive(c.first);
+    archive(c.member);
+    archive(index_);
+    archive(clump_of_id_);
+    archive(clump_of_index_);
+  }
+
  private:
   void Place(size_t c, Particles& p, bool positions) const;  // spheres' x (optional), v, w
 

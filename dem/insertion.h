@@ -21,6 +21,7 @@ class Rng {
   }
   double Uniform() { return static_cast<double>(Next() >> 11) * 0x1.0p-53; }  // [0, 1)
   double Uniform(double a, double b) { return a + (b - a) * Uniform(); }
+  uint64_t state() const { return state_; }  // Rng(state()) goes on with the same numbers
 
  private:
   uint64_t state_;

@@ -48,6 +48,20 @@ class NeighborList {
   std::vector<int32_t> partner;     // j of each pair (num_pairs)
   std::vector<int32_t> slab_start;  // particle range of each slab (num_slabs + 1)
 
+  // Lists every field that lasts from one build to the next to `archive` (dem/archive.h: saved
+  // and restored by System::SaveState / RestoreState).
+  template <typename Archive>
+  void Fields(Archive& archive) {
+    archive(start);
+    archive(partner);
+    archive(slab_start);
+    archive(lo_);
+    archive(inv_cell_);
+    archive(n_);
+    archive(axis_);
+    archive(cell_start_);
+  }
+
  private:
   int CellAlong(int g, const Vec3& x) const;  // cell index along grid axis g, clamped
   int64_t CellKey(const Vec3& x, int c[3]) const;

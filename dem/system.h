@@ -205,6 +205,16 @@ class System {
 
   // Contact history, for saving and restoring a bed bit for bit.
   std::vector<ContactRecord> Contacts() const;
+
+  // The whole mutable state as bytes (dem/state_io.cpp): particles in storage order, clumps and
+  // their templates, the neighbour, near and wall lists with the contact history they carry, the
+  // meshes' motion, candidates and history, sleeping, time and counters; everything but the
+  // model (materials, config, mesh geometry) and the phase clocks. A System made with the same
+  // materials, config and meshes (added in the same order) that RestoreState()s them steps on
+  // bit for bit as this one would, on any thread count. RestoreState throws std::runtime_error
+  // when the bytes do not fit (another format, other meshes).
+  std::vector<char> SaveState() const;
+  void RestoreState(const std::vector<char>& bytes);
   void SetContacts(const std::vector<ContactRecord>& contacts);
 
   // Totals over all particles, summed in persistent-id order (a clump counts as one rigid body,
@@ -223,6 +233,9 @@ class System {
  private:
   // Reorders storage and rebuilds the lists (internal::Rebuild, dem/neighbor_build.cpp).
   void Rebuild();
+  // Lists the mutable state to a dem/archive.h archive (SaveState, RestoreState).
+  template <typename Archive>
+  void StateFields(Archive& archive);
 
   MaterialTable materials_;
   SystemConfig config_;

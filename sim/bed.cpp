@@ -64,22 +64,43 @@ dem::Quat UniformRotation(dem::Rng& rng) {
 
 }  // namespace
 
-SettleReport FillAndSettle(const Scene& scene, dem::System* system, const SettleObserver& observe) {
+SettleReport FillAndSettle(const Scene& scene, dem::System* system, const SettleObserver& observe,
+                           PourPoint* point) {
   SettleReport total;
   const BedSpec& bed = scene.bed;
   const int material = scene.materials.Find(bed.material);
-  dem::Rng rng(bed.seed);
-  int64_t remaining = bed.count;
+  PourPoint local;
+  PourPoint& at = point != nullptr ? *point : local;
+  const bool resumed = at.started;
+  dem::Rng rng(resumed ? at.rng : bed.seed);
+  int64_t remaining = bed.count - (resumed ? at.poured : 0);
   // Clumps are poured as their bounding spheres (so no two overlap), each turned at random, at a
-  // lattice pitch that gives a solid fraction of clumps of fill_fraction where it can.
+  // lattice pitch that gives a solid fraction of clumps of fill_fraction where it can (a resumed
+  // pour's loaded bed has the template already: AddClumpTemplate reuses it).
   const bool clumps = !bed.clump.empty();
   const int shape = clumps ? system->AddClumpTemplate(bed.clump_template) : -1;
   const double fill =
       clumps ? bed.fill_fraction * 4.0 / 3.0 * M_PI * std::pow(bed.radius_max, 3) / bed.clump_volume
              : bed.fill_fraction;
   const size_t per_body = clumps ? bed.clump_template.radii.size() : 1;
-  system->Reserve(static_cast<size_t>(bed.count) * per_body + system->particles().size());
+  system->Reserve(static_cast<size_t>(remaining) * per_body + system->particles().size());
+  auto settle = [&](double min_time, double max_time) {
+    const SettleReport r = Settle(system, bed.settle_ke, min_time, max_time, observe);
+    total.steps += r.steps;
+    total.sim_time += r.sim_time;
+    total.mean_ke = r.mean_ke;
+    total.settled = r.settled;
+    total.status = r.status;
+    return r.status.ok();
+  };
+  if (resumed) {
+    // The last layer settles on for what is left of its time.
+    total.layers = at.layers;
+    const double spent = system->time() - at.layer_t0;
+    if (!settle(std::max(0.0, at.layer_fall - spent), bed.settle_max_time - spent)) return total;
+  }
   while (remaining > 0) {
+    if (observe && !observe(*system)) break;  // stopped between layers
     // Pour into the free part of the box above the present top of the bed.
     double top = scene.box_min.z;
     const dem::Particles& p = system->particles();
@@ -111,13 +132,8 @@ SettleReport FillAndSettle(const Scene& scene, dem::System* system, const Settle
     }
     const double g = dem::Norm(scene.gravity);
     const double t_fall = g > 0 ? std::sqrt(2.0 * (z_hi - z_lo) / g) : 0.0;
-    const SettleReport r = Settle(system, bed.settle_ke, t_fall, bed.settle_max_time, observe);
-    total.steps += r.steps;
-    total.sim_time += r.sim_time;
-    total.mean_ke = r.mean_ke;
-    total.settled = r.settled;
-    total.status = r.status;
-    if (!r.status.ok()) break;
+    at = {total.layers, bed.count - remaining, rng.state(), system->time(), t_fall, true};
+    if (!settle(t_fall, bed.settle_max_time)) break;
   }
   return total;
 }

@@ -26,8 +26,22 @@ struct SettleReport {
 // return false to stop early.
 using SettleObserver = std::function<bool(const dem::System&)>;
 
-// Pours scene.bed into the (empty or partly filled) system and settles it.
-SettleReport FillAndSettle(const Scene& scene, dem::System* system, const SettleObserver& observe);
+// Where a pour stands, kept up to date by FillAndSettle (a bed saved mid-pour carries it, and a
+// pour resumed from that bed goes on from it).
+struct PourPoint {
+  int layers = 0;          // layers inserted so far
+  int64_t poured = 0;      // bodies (spheres or clumps) inserted so far
+  uint64_t rng = 0;        // dem::Rng state after the last insertion
+  double layer_t0 = 0;     // time the last layer began to settle [s]
+  double layer_fall = 0;   // its fall time, the least it settles [s]
+  bool started = false;    // a layer has been inserted
+};
+
+// Pours scene.bed into the (empty or partly filled) system and settles it. With `point`, it
+// keeps *point up to date; a started *point (a pour saved mid-way and loaded back) is resumed:
+// the last layer settles on from where it was, then the rest is poured.
+SettleReport FillAndSettle(const Scene& scene, dem::System* system, const SettleObserver& observe,
+                           PourPoint* point = nullptr);
 
 // Steps until the mean kinetic energy per particle is below `mean_ke` (checked every
 // `check_every` steps, and only after `min_time`: particles poured at rest start below any

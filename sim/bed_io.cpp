@@ -1,6 +1,7 @@
 #include "sim/bed_io.h"
 
 #include <hdf5.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -106,7 +107,7 @@ void WriteClumps(hid_t file, const dem::System& system) {
 
 // Writes everything but the sidecar into a new file at `path`.
 h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& system,
-                               const std::string& scene_yaml) {
+                               const std::string& scene_yaml, const PourPoint* pour) {
   const dem::Particles& p = system.particles();
   Handle file = h5::CreateFile(path, /*swmr=*/false, nullptr);
   Handle root(CheckId(H5Gopen2(file.get(), "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);
@@ -114,6 +115,13 @@ h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& syste
   h5::WriteStringAttribute(root.get(), "scene_yaml", scene_yaml);
   h5::WriteDoubleAttribute(root.get(), "time", system.time());
   h5::WriteStateHash(root.get(), system.StateHash());
+  if (pour != nullptr) {
+    h5::WriteDoubleAttribute(root.get(), "pour_layers", pour->layers);
+    h5::WriteDoubleAttribute(root.get(), "pour_poured", static_cast<double>(pour->poured));
+    h5::WriteU64Attribute(root.get(), "pour_rng", pour->rng);
+    h5::WriteDoubleAttribute(root.get(), "pour_layer_t0", pour->layer_t0);
+    h5::WriteDoubleAttribute(root.get(), "pour_layer_fall", pour->layer_fall);
+  }
 
   // Particles: the snapshot holds the arrays; /particles links to them and adds force, torque.
   const h5::SnapshotEntry entry = h5::WriteParticleSnapshot(file.get(), 0, system.time(), p);
@@ -256,12 +264,13 @@ SavedClumps ReadClumps(const h5::Reader& in, const std::vector<int64_t>& ids,
 
 }  // namespace
 
-void SaveBed(const std::string& path, const dem::System& system, const std::string& scene_yaml) {
+void SaveBed(const std::string& path, const dem::System& system, const std::string& scene_yaml,
+             const PourPoint* pour) {
   namespace fs = std::filesystem;
-  const std::string temporary = path + ".partial";
+  const std::string temporary = path + "." + std::to_string(::getpid()) + ".partial";
   h5::SnapshotEntry entry;
   try {
-    entry = WriteBedFile(temporary, system, scene_yaml);
+    entry = WriteBedFile(temporary, system, scene_yaml, pour);
     fs::rename(temporary, path);
   } catch (const InputError& e) {
     std::error_code ignored;
@@ -293,6 +302,29 @@ std::string BedSceneYaml(const std::string& path) {
     return h5::ReadStringAttribute(file.get(), "scene_yaml");
   } catch (const std::exception&) {
     return "";
+  }
+}
+
+bool ReadPourPoint(const std::string& path, const std::string& scene_yaml, PourPoint* pour) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec) || BedSceneYaml(path) != scene_yaml) return false;
+  try {
+    const Handle file = h5::OpenForReading(path, false);
+    const h5::Reader in(path, file.get());
+    if (!in.HasAttribute("/", "pour_rng")) return false;
+    Handle attribute(CheckId(H5Aopen(file.get(), "pour_rng", H5P_DEFAULT), "H5Aopen pour_rng"),
+                     H5Aclose);
+    uint64_t rng = 0;
+    CheckOk(H5Aread(attribute.get(), H5T_NATIVE_UINT64, &rng), "H5Aread pour_rng");
+    pour->layers = static_cast<int>(in.ReadDoubleAttribute("/", "pour_layers"));
+    pour->poured = static_cast<int64_t>(in.ReadDoubleAttribute("/", "pour_poured"));
+    pour->rng = rng;
+    pour->layer_t0 = in.ReadDoubleAttribute("/", "pour_layer_t0");
+    pour->layer_fall = in.ReadDoubleAttribute("/", "pour_layer_fall");
+    pour->started = true;
+    return true;
+  } catch (const std::exception&) {
+    return false;
   }
 }
 

@@ -30,12 +30,21 @@
 #include <string>
 
 #include "dem/system.h"
+#include "sim/bed.h"
 
 namespace sim {
 
-// Writes `system` to `path` (parent folders created; written to a temporary file and renamed, so
-// an interrupted save never leaves a partial bed). Throws sim::InputError if it cannot be created.
-void SaveBed(const std::string& path, const dem::System& system, const std::string& scene_yaml);
+// Writes `system` to `path` (parent folders created; written to a temporary file of this process
+// and renamed, so an interrupted save never leaves a partial bed, nor do two processes saving at
+// once). Throws sim::InputError if it cannot be created. With `pour`, the bed is an unfinished
+// pour: root attributes pour_layers, pour_poured, pour_rng, pour_layer_t0, pour_layer_fall
+// (sim::PourPoint) say where it stopped.
+void SaveBed(const std::string& path, const dem::System& system, const std::string& scene_yaml,
+             const PourPoint* pour = nullptr);
+
+// Whether `path` is a bed saved mid-pour of the scene text `scene_yaml`; if so *pour is where it
+// stopped. False for a missing or unreadable file, a finished bed or another scene's.
+bool ReadPourPoint(const std::string& path, const std::string& scene_yaml, PourPoint* pour);
 
 // Appends the saved particles to `system` (AddParticle in saved id order, so a bed loaded into an
 // empty System keeps its ids), restores their last-step force and torque and their contact

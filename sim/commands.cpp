@@ -1,11 +1,14 @@
 #include "sim/commands.h"
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 
@@ -13,8 +16,10 @@
 #include "sim/table_arm.h"
 #include "sim/bed.h"
 #include "sim/bed_io.h"
+#include "sim/checkpoint.h"
 #include "sim/exit_status.h"
 #include "sim/h5_output.h"
+#include "sim/internal_h5.h"
 #include "sim/progress.h"
 #include "sim/world.h"
 
@@ -46,9 +51,43 @@ double PeakRssMb() {
 
 }  // namespace
 
+std::string PourPath(const std::string& output) {
+  return std::filesystem::path(output).replace_extension(".pour.h5").string();
+}
+
+void CheckWritable(const std::string& path) {
+  h5::MakeParentFolders(path);
+  // A file of our own beside it, created and removed: the folder takes new files.
+  const std::string probe = path + "." + std::to_string(::getpid()) + ".probe";
+  std::FILE* f = std::fopen(probe.c_str(), "wb");
+  if (f == nullptr) {
+    throw InputError(path + ": cannot write there: " + std::strerror(errno));
+  }
+  std::fclose(f);
+  std::error_code ignored;
+  std::filesystem::remove(probe, ignored);
+}
+
+void RefuseOutputOverInput(const std::string& output, const std::string& input,
+                           const std::string& what) {
+  namespace fs = std::filesystem;
+  if (input.empty()) return;
+  std::error_code ec;
+  const bool same = fs::exists(output, ec) && fs::exists(input, ec)
+                        ? fs::equivalent(output, input, ec)
+                        : fs::weakly_canonical(output, ec) == fs::weakly_canonical(input, ec);
+  if (same) {
+    throw InputError(output + ": -o names the run's own input (" + what + " = " + input +
+                     "); give another output file");
+  }
+}
+
 int MakeBed(const Scene& scene, const RunOptions& options) {
   InstallStopHandlers();
+  // The output's folder is made and checked for writing before any work.
+  CheckWritable(options.output);
   World world(scene, options.threads);
+  world.KeepPour(PourPath(options.output));
   const auto wall0 = std::chrono::steady_clock::now();
   SettleReport r;
   const int status = world.Pour(options.quiet, &r);
@@ -67,20 +106,55 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   // The arm on a wrench table: no bed, no DEM (sim/table_arm.h).
   if (scene.arm.table_driven) return RunTableArm(scene, options).exit_status;
   InstallStopHandlers();
-  World world(scene, options.threads);
-  if (!scene.bed.file.empty()) {
-    world.LoadBed(scene.bed.file);  // already resolved against the scene's folder
-  } else {
-    SettleReport r;
-    const int status = world.Pour(options.quiet, &r);
-    if (status != kExitOk) return status;
+  // The output first, before any work: refused when it is the run's own input bed or another
+  // process writes it (locked from here to the end).
+  RefuseOutputOverInput(options.output, scene.bed.file, scene.path + ": bed.file");
+  const bool checkpoints = options.checkpoint_every > 0 || options.resume;
+  if (checkpoints && scene.arm.enabled) {
+    throw InputError(scene.path + ": arm: a run with an arm cannot be checkpointed or resumed "
+                                  "(Bullet's solver state is not saved)");
   }
-  world.OpenOutput(options.output);
-  // The scoop on the arm (Bullet, coupled every step) when the scene has an arm, else on its path.
-  if (scene.dig.enabled)
-    world.StartDig(scene.arm.enabled ? std::unique_ptr<ScoopDriver>(new ArmDriver(scene))
-                                     : KinematicDriver::ForDig(scene.dig));
-  const RunResult result = world.Run(Control(options));
+  const std::string restart = CheckpointPath(options.output);
+  World world(scene, options.threads);
+  auto driver = [&]() -> std::unique_ptr<ScoopDriver> {
+    if (!scene.dig.enabled) return nullptr;
+    // The scoop on the arm (Bullet, coupled every step) when the scene has an arm, else on its
+    // path.
+    if (scene.arm.enabled) return std::unique_ptr<ScoopDriver>(new ArmDriver(scene));
+    return KinematicDriver::ForDig(scene.dig);
+  };
+  if (options.resume) {
+    const Checkpoint checkpoint = ReadCheckpoint(restart);
+    if (checkpoint.scene_yaml != scene.yaml_text) {
+      throw InputError(restart + ": made from another scene text than " + scene.path +
+                       "'s (changed since?); resume with the scene it was made from");
+    }
+    const OutputCursor cursor = DecodeCursor(checkpoint.output_state, restart);
+    world.OpenOutput(options.output, &cursor);
+    world.ResumeFrom(checkpoint, driver(), restart);
+    Status("scoopsim: going on from %s at t = %.6g s\n", restart.c_str(), checkpoint.time);
+  } else {
+    world.OpenOutput(options.output);
+    world.KeepPour(PourPath(options.output));
+    if (!scene.bed.file.empty()) {
+      world.LoadBed(scene.bed.file);  // already resolved against the scene's folder
+    } else {
+      SettleReport r;
+      const int status = world.Pour(options.quiet, &r);
+      if (status != kExitOk) return status;
+    }
+    if (scene.dig.enabled) world.StartDig(driver());
+  }
+  RunControl control = Control(options);
+  if (checkpoints) {
+    control.checkpoint_every = options.checkpoint_every;
+    control.checkpoint_path = restart;
+  }
+  const RunResult result = world.Run(control);
+  if (checkpoints && result.exit_status == kExitOk && !result.stopped_after) {
+    std::error_code ignored;
+    std::filesystem::remove(restart, ignored);  // ended: nothing to go on from
+  }
   if (options.dig_summary) *options.dig_summary = world.dig_summary();
   return result.exit_status;
 }

@@ -23,12 +23,29 @@ struct RunOptions {
   double frame_every = 0;             // [s]
   double stop_after = 0;              // stop after this much simulated time [s] (0: run to the end)
   DigSummary* dig_summary = nullptr;  // filled by a dig run when set
+  double checkpoint_every = 0;        // keep OUT.restart.h5 every this many wall seconds (0: no)
+  bool resume = false;                // go on from OUT.restart.h5 (sim/checkpoint.h)
 };
+
+// Where a command that pours keeps the bed poured so far (World::KeepPour): OUT.h5 -> OUT.pour.h5.
+std::string PourPath(const std::string& output);
+// Creates the parent folders of `path` and checks a file can be created there; throws
+// sim::InputError naming the path and the reason.
+void CheckWritable(const std::string& path);
+
+// Throws sim::InputError when `output` is the file `input` (the same file by any path; "" never
+// is): a run must not overwrite its own input. `what` names the input ("scenes/x.yaml: bed.file").
+void RefuseOutputOverInput(const std::string& output, const std::string& input,
+                           const std::string& what);
 
 // `scoopsim bed SCENE -o BED.h5`: fill the scene's box, settle, save the bed.
 int MakeBed(const Scene& scene, const RunOptions& options);
 
-// `scoopsim run SCENE -o OUT.h5`: load (or make) the bed and run for scene.duration.
+// `scoopsim run SCENE -o OUT.h5`: load (or make) the bed and run for scene.duration. With
+// checkpoint_every, the run's state is kept in CheckpointPath(OUT.h5) that often (and when
+// stopped by a signal), removed when the run ends; with resume, the run goes on from it (its
+// scene text must be the scene's) and writes the same output as the uninterrupted run. A scene
+// with an arm cannot be checkpointed (Bullet's solver state is not saved): InputError.
 int RunScene(const Scene& scene, const RunOptions& options);
 
 // `scoopsim study shape SCENE -o OUT.h5`: the shape-complexity study (paper section 4, Fig. 8,

@@ -1,7 +1,9 @@
 #include "sim/h5_output.h"
 
 #include <hdf5.h>
+#include <fcntl.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -37,18 +39,24 @@ void CheckOk(herr_t status, const std::string& what) {
   if (status < 0) throw std::runtime_error("HDF5: " + what + " failed");
 }
 
-Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
+void MakeParentFolders(const std::string& path) {
   namespace fs = std::filesystem;
-  if (got_swmr != nullptr) *got_swmr = false;
   const fs::path parent = fs::path(path).parent_path();
-  if (!parent.empty()) {
-    std::error_code ec;
-    fs::create_directories(parent, ec);
-    if (ec) {
-      throw InputError(path + ": cannot create the folder " + parent.string() + ": " +
-                       ec.message());
-    }
+  if (parent.empty()) return;
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec) {
+    throw InputError(path + ": cannot create the folder " + parent.string() + ": " +
+                     ec.message());
   }
+}
+
+Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
+  if (got_swmr != nullptr) *got_swmr = false;
+  MakeParentFolders(path);
+  // Every call is checked and reported on one line: HDF5's own stack print would bury it (a full
+  // disk printed hundreds of lines).
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   // Strong close: H5Fclose really closes the file, so "closed" means "complete on disk".
   Handle fapl(CheckId(H5Pcreate(H5P_FILE_ACCESS), "H5Pcreate"), H5Pclose);
   CheckOk(H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG), "H5Pset_fclose_degree");
@@ -58,6 +66,7 @@ Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
     // to the same format without SWMR.
     CheckOk(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_LATEST, H5F_LIBVER_LATEST),
             "H5Pset_libver_bounds");
+    CheckOk(H5Pset_driver(fapl.get(), CleanHeaderDriver(), nullptr), "H5Pset_driver");
     H5E_BEGIN_TRY {
       file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC | H5F_ACC_SWMR_WRITE, H5P_DEFAULT, fapl.get());
     }
@@ -360,7 +369,8 @@ constexpr hsize_t kSeriesChunkRows = 1024;  // rows per chunk of a time series
 struct Series {
   h5::Handle dataset;
   int width = 0;
-  hsize_t rows_on_disk = 0;
+  hsize_t rows_on_disk = 0;     // written to the dataset
+  hsize_t rows_flushed = 0;     // of which flushed to the file
   std::vector<double> pending;  // buffered rows, row-major (pending rows x width)
 };
 
@@ -377,6 +387,59 @@ struct H5Output::Impl {
   std::vector<h5::SnapshotEntry> snapshots;
   std::string group;     // SetGroup prefix ("" or "/name")
   h5::Handle group_obj;  // that group, once an attribute was set on it
+  int lock_fd = -1;      // holds the write lock on the file until Close()
+  int old_lock_fd = -1;  // and on the file it replaced (PutInPlace)
+  const h5::CleanDriverState* driver = nullptr;  // what the file driver saw (CreateFile's)
+  std::string failure;   // why writing failed; then nothing more is written
+  bool flush_due = false;  // a series holds a chunk's worth of rows
+
+  // Runs a write; on the first failure, records the one-line reason (which file, how much is in
+  // it, what it keeps) and throws it as OutputError. After a failure every write throws it again.
+  // The driver is asked too: HDF5 does not report every failed write (a failure while closing
+  // a dataset handle is lost).
+  template <typename F>
+  void Write(F&& write) {
+    if (!failure.empty()) throw OutputError(failure);
+    try {
+      write();
+    } catch (const std::exception& e) {
+      failure = Describe(e.what());
+      throw OutputError(failure);
+    }
+    if (driver != nullptr && driver->failed) {
+      failure = Describe("");
+      throw OutputError(failure);
+    }
+  }
+
+  std::string Describe(const std::string& what) const {
+    const h5::CleanDriverState state = driver != nullptr ? *driver : h5::CleanDriverState{};
+    std::string message = path + ": ";
+    if (state.failed) {
+      char size[64];
+      std::snprintf(size, sizeof size, "%.3g MB", state.file_size / 1e6);
+      message += std::string("write failed (") + std::strerror(state.error) + ") with " + size +
+                 " in the file";
+    } else {
+      message += what;
+    }
+    // What the file keeps: the longest series as of the last complete flush.
+    const Series* longest = nullptr;
+    const std::string* name = nullptr;
+    for (const auto& [n, s] : series) {  // ties: a */time series
+      const bool time = n.size() >= 5 && n.compare(n.size() - 5, 5, "/time") == 0;
+      if (longest == nullptr || s.rows_flushed > longest->rows_flushed ||
+          (s.rows_flushed == longest->rows_flushed && time)) {
+        longest = &s;
+        name = &n;
+      }
+    }
+    if (longest != nullptr) {
+      message += "; it keeps the rows of the last flush (" +
+                 std::to_string(longest->rows_flushed) + " of " + *name + ")";
+    }
+    return message;
+  }
 
   // Where attributes go: the SetGroup group (created on first use) or the root.
   hid_t AttributeTarget() {
@@ -469,23 +532,164 @@ struct H5Output::Impl {
     s.pending.clear();
   }
 
+  // Takes from the file now at `path` the first cursor.rows of each series (buffered, written at
+  // the next flush) and the first cursor.snapshot_time.size() snapshots (a run resumed from its
+  // checkpoint). Copied value by value: H5Ocopy into a file in SWMR mode fails in HDF5 1.10.
+  void CopyUpTo(const OutputCursor& cursor) {
+    const h5::Handle old = h5::OpenForReading(path, false);
+    const h5::Reader in(path, old.get());
+    auto width_of = [&](const std::string& name) -> hsize_t {
+      if (!in.Exists(name)) in.Fail(name, "missing; cannot resume from this file");
+      const h5::Handle d(h5::CheckId(H5Dopen2(old.get(), name.c_str(), H5P_DEFAULT), name),
+                         H5Dclose);
+      const h5::Handle space(h5::CheckId(H5Dget_space(d.get()), name), H5Sclose);
+      hsize_t dims[2] = {0, 1};
+      return H5Sget_simple_extent_dims(space.get(), dims, nullptr) == 2 ? dims[1] : 1;
+    };
+    for (const auto& [name, rows] : cursor.rows) {
+      const hsize_t width = width_of(name);
+      int64_t n = 0;
+      const std::vector<double> values =
+          in.Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, width, &n);
+      if (n < rows)
+        in.Fail(name, "holds " + std::to_string(n) + " rows, its checkpoint " +
+                          std::to_string(rows) + "; cannot resume from this file");
+      Series& s = GetSeries(name, static_cast<int>(width));
+      s.pending.assign(values.begin(), values.begin() + rows * static_cast<int64_t>(width));
+    }
+    struct Field {
+      const char* name;
+      hid_t file_type, memory_type;
+      hsize_t width;
+    };
+    const Field fields[] = {{"id", H5T_STD_I64LE, H5T_NATIVE_INT64, 1},
+                            {"connectivity", H5T_STD_I64LE, H5T_NATIVE_INT64, 1},
+                            {"position", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
+                            {"velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
+                            {"angular_velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
+                            {"radius", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                            {"speed", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                            {"material", H5T_STD_I32LE, H5T_NATIVE_INT32, 1},
+                            {"awake", H5T_STD_I32LE, H5T_NATIVE_INT32, 1}};
+    h5::Handle lcpl(h5::CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
+    h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1),
+                "H5Pset_create_intermediate_group");
+    for (size_t k = 0; k < cursor.snapshot_time.size(); ++k) {
+      const std::string group_name = h5::SnapshotGroupName(static_cast<int64_t>(k));
+      const int64_t count = cursor.snapshot_count[k];
+      const h5::Handle group(
+          h5::CheckId(H5Gcreate2(file.get(), group_name.c_str(), lcpl.get(), H5P_DEFAULT,
+                                 H5P_DEFAULT),
+                      "H5Gcreate2 " + group_name),
+          H5Gclose);
+      h5::WriteDoubleAttribute(group.get(), "time", cursor.snapshot_time[k]);
+      for (const Field& f : fields) {
+        const std::string name = group_name + "/" + f.name;
+        if (f.memory_type == H5T_NATIVE_DOUBLE) {
+          const std::vector<double> v =
+              in.Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, count, f.width);
+          h5::WriteArray(group.get(), f.name, f.file_type, f.memory_type, v.data(), count, f.width);
+        } else if (f.memory_type == H5T_NATIVE_INT64) {
+          const std::vector<int64_t> v =
+              in.Read<int64_t>(name, H5T_INTEGER, H5T_NATIVE_INT64, count, f.width);
+          h5::WriteArray(group.get(), f.name, f.file_type, f.memory_type, v.data(), count, f.width);
+        } else {
+          const std::vector<int32_t> v =
+              in.Read<int32_t>(name, H5T_INTEGER, H5T_NATIVE_INT32, count, f.width);
+          h5::WriteArray(group.get(), f.name, f.file_type, f.memory_type, v.data(), count, f.width);
+        }
+      }
+      snapshots.push_back({group_name, cursor.snapshot_time[k], count});
+    }
+  }
+
   void WriteAllRows() {
     for (auto& [name, s] : series) WriteRows(name, s);
   }
 };
 
+namespace {
+
+// Takes a write lock a second writer cannot get on the file `fd` is open on: an
+// open-file-description lock (fcntl F_OFD_SETLK), which HDF5's own flock() locks do not meet and
+// which no close() of another descriptor of the file releases. False if another process holds
+// it; a file system without such locks counts as unlocked.
+bool LockFile(int fd) {
+  struct flock lock {};
+  lock.l_type = F_WRLCK;
+  lock.l_whence = SEEK_SET;
+  return ::fcntl(fd, F_OFD_SETLK, &lock) == 0 || (errno != EAGAIN && errno != EACCES);
+}
+
+// Puts the new file `temporary` (written, flushed and locked by this process) in place at
+// `path`, refusing when another process writes `path`: a new name is taken with link() (fails if
+// the name exists), an existing file is locked first, then replaced with rename(); either step
+// is atomic, so `path` is always an old file or the new one, never a half-made one. Returns the
+// descriptor holding the lock on the replaced file (-1 if none), kept until Close() so that a
+// process which opened it before the rename cannot take it over.
+int PutInPlace(const std::string& temporary, const std::string& path) {
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    if (::link(temporary.c_str(), path.c_str()) == 0) {
+      ::unlink(temporary.c_str());
+      return -1;
+    }
+    if (errno != EEXIST && errno != EPERM && errno != ENOTSUP) break;
+    const int old = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+    if (old < 0 && errno == ENOENT) continue;  // gone meanwhile: take the name again
+    if (old < 0) break;
+    if (!LockFile(old)) {
+      ::close(old);
+      throw InputError(path + ": another process (a scoopsim run?) is writing this file; give "
+                              "this run another -o");
+    }
+    if (::rename(temporary.c_str(), path.c_str()) == 0) return old;
+    ::close(old);
+    break;
+  }
+  throw InputError(path + ": cannot create the output file: " + std::strerror(errno));
+}
+
+}  // namespace
+
 H5Output::H5Output(const std::string& path, const std::string& scene_yaml,
-                   const std::string& version, double flush_seconds)
+                   const std::string& version, double flush_seconds, const OutputCursor* resume)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.path = path;
   m.flush_seconds = flush_seconds;
-  m.file = h5::CreateFile(path, /*swmr=*/true, &m.swmr);
-  m.root =
-      h5::Handle(h5::CheckId(H5Gopen2(m.file.get(), "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);
-  h5::WriteStringAttribute(m.root.get(), "scene_yaml", scene_yaml);
-  h5::WriteStringAttribute(m.root.get(), "version", version);
-  Flush();  // a valid file from the start, even if the run is killed before its first flush
+  // Made under a name of this process, then put in place: a run killed at any moment leaves the
+  // old file or a valid new one at `path`, and a second writer of `path` is refused.
+  const std::string temporary = path + "." + std::to_string(::getpid()) + ".new";
+  try {
+    m.file = h5::CreateFile(temporary, /*swmr=*/true, &m.swmr);
+    m.driver = h5::CleanDriverStateOf(m.file.get());
+    m.root =
+        h5::Handle(h5::CheckId(H5Gopen2(m.file.get(), "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);
+    h5::WriteStringAttribute(m.root.get(), "scene_yaml", scene_yaml);
+    h5::WriteStringAttribute(m.root.get(), "version", version);
+    if (resume != nullptr) m.CopyUpTo(*resume);
+    Flush();  // a valid file from the start, even if the run is killed before its first flush
+    m.lock_fd = ::open(temporary.c_str(), O_RDWR | O_CLOEXEC);
+    if (m.lock_fd < 0 || !LockFile(m.lock_fd))
+      throw InputError(temporary + ": cannot lock the new output file");
+    m.old_lock_fd = PutInPlace(temporary, path);
+    if (!m.snapshots.empty()) h5::WriteXdmf(m.path, m.snapshots);
+  } catch (...) {
+    m.root.reset();
+    m.file.reset();
+    if (m.lock_fd >= 0) ::close(m.lock_fd);
+    m.lock_fd = -1;
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    try {
+      throw;
+    } catch (const InputError& e) {  // name the file asked for, not the temporary one
+      std::string message = e.what();
+      if (message.compare(0, temporary.size(), temporary) == 0)
+        message = path + message.substr(temporary.size());
+      throw InputError(message);
+    }
+  }
 }
 
 H5Output::~H5Output() {
@@ -500,37 +704,48 @@ void H5Output::AppendRow(const std::string& dataset, const double* values, int w
   Impl& m = *impl_;
   m.RequireOpen("AppendRow");
   if (width < 1) throw std::invalid_argument("H5Output::AppendRow: width must be >= 1");
+  if (!m.failure.empty()) throw OutputError(m.failure);
   const std::string name =
       m.group + (!dataset.empty() && dataset[0] == '/' ? dataset : "/" + dataset);
-  Series& s = m.GetSeries(name, width);
-  s.pending.insert(s.pending.end(), values, values + width);
-  // Write when the buffer reaches the next chunk boundary, so whole chunks go out in one piece.
-  const hsize_t to_boundary = kSeriesChunkRows - s.rows_on_disk % kSeriesChunkRows;
-  if (s.pending.size() / static_cast<size_t>(width) >= to_boundary) m.WriteRows(name, s);
+  Series* s = nullptr;
+  const auto it = m.series.find(name);
+  if (it != m.series.end()) {
+    s = &m.GetSeries(name, width);  // checks the width (std::invalid_argument)
+  } else {
+    m.Write([&] { s = &m.GetSeries(name, width); });  // creates the dataset
+  }
+  s->pending.insert(s->pending.end(), values, values + width);
+  // Rows go to the file only in Flush(), so the file's row counts move with its flushes; a
+  // series that reaches its next chunk boundary makes the next MaybeFlush() flush (whole chunks
+  // in one piece, and never between two series of one step's rows).
+  const hsize_t to_boundary = kSeriesChunkRows - s->rows_on_disk % kSeriesChunkRows;
+  if (s->pending.size() / static_cast<size_t>(width) >= to_boundary) m.flush_due = true;
 }
 
 void H5Output::WriteSnapshot(double time, const dem::Particles& particles) {
   Impl& m = *impl_;
   m.RequireOpen("WriteSnapshot");
   const int64_t index = static_cast<int64_t>(m.snapshots.size());
-  m.snapshots.push_back(h5::WriteParticleSnapshot(m.file.get(), index, time, particles));
+  m.Write([&] {
+    m.snapshots.push_back(h5::WriteParticleSnapshot(m.file.get(), index, time, particles));
+  });
   Flush();
-  h5::WriteXdmf(m.path, m.snapshots);
+  m.Write([&] { h5::WriteXdmf(m.path, m.snapshots); });
 }
 
 void H5Output::SetStateHash(uint64_t hash) {
   impl_->RequireOpen("SetStateHash");
-  h5::WriteStateHash(impl_->AttributeTarget(), hash);
+  impl_->Write([&] { h5::WriteStateHash(impl_->AttributeTarget(), hash); });
 }
 
 void H5Output::SetAttribute(const std::string& name, double value) {
   impl_->RequireOpen("SetAttribute");
-  h5::WriteDoubleAttribute(impl_->AttributeTarget(), name, value);
+  impl_->Write([&] { h5::WriteDoubleAttribute(impl_->AttributeTarget(), name, value); });
 }
 
 void H5Output::SetAttribute(const std::string& name, const std::string& value) {
   impl_->RequireOpen("SetAttribute");
-  h5::WriteStringAttribute(impl_->AttributeTarget(), name, value);
+  impl_->Write([&] { h5::WriteStringAttribute(impl_->AttributeTarget(), name, value); });
 }
 
 void H5Output::SetGroup(const std::string& group) {
@@ -547,7 +762,9 @@ bool H5Output::MaybeFlush() {
   Impl& m = *impl_;
   if (!m.file.valid()) return false;
   const auto now = std::chrono::steady_clock::now();
-  if (std::chrono::duration<double>(now - m.last_flush).count() < m.flush_seconds) return false;
+  if (!m.flush_due &&
+      std::chrono::duration<double>(now - m.last_flush).count() < m.flush_seconds)
+    return false;
   Flush();
   return true;
 }
@@ -555,29 +772,60 @@ bool H5Output::MaybeFlush() {
 void H5Output::Flush() {
   Impl& m = *impl_;
   m.RequireOpen("Flush");
-  m.WriteAllRows();
-  h5::CheckOk(H5Fflush(m.file.get(), H5F_SCOPE_LOCAL), "H5Fflush " + m.path);
+  m.Write([&] {
+    m.WriteAllRows();
+    h5::CheckOk(H5Fflush(m.file.get(), H5F_SCOPE_LOCAL), "H5Fflush " + m.path);
+  });
+  for (auto& [name, s] : m.series) s.rows_flushed = s.rows_on_disk;
+  m.flush_due = false;
   m.last_flush = std::chrono::steady_clock::now();
 }
 
 void H5Output::Close() {
   Impl& m = *impl_;
   if (!m.file.valid()) return;
-  // Write what is buffered, then close every handle even if writing failed.
+  // Write what is buffered, then close every handle even if writing failed. After a failure
+  // nothing more is written: the file keeps what its last flush left.
   std::exception_ptr error;
-  try {
-    m.WriteAllRows();
-  } catch (...) {
-    error = std::current_exception();
+  if (m.failure.empty()) {
+    try {
+      m.Write([&] {
+        m.WriteAllRows();
+        h5::CheckOk(H5Fflush(m.file.get(), H5F_SCOPE_LOCAL), "H5Fflush " + m.path);
+      });
+    } catch (...) {
+      error = std::current_exception();
+    }
   }
   m.series.clear();
   m.group_obj.reset();
   m.root.reset();
+  m.driver = nullptr;
   const herr_t status = m.file.reset();
+  for (int* fd : {&m.lock_fd, &m.old_lock_fd}) {
+    if (*fd >= 0) ::close(*fd);
+    *fd = -1;
+  }
   if (error) std::rethrow_exception(error);
-  h5::CheckOk(status, "H5Fclose " + m.path);
+  if (m.failure.empty() && status < 0) {
+    m.failure = m.path + ": closing the file failed";
+    throw OutputError(m.failure);
+  }
 }
 
+bool H5Output::failed() const { return !impl_->failure.empty(); }
+
+OutputCursor H5Output::Cursor() {
+  Flush();
+  OutputCursor c;
+  for (const auto& [name, s] : impl_->series)
+    c.rows.emplace_back(name, static_cast<int64_t>(s.rows_flushed));
+  for (const h5::SnapshotEntry& e : impl_->snapshots) {
+    c.snapshot_time.push_back(e.time);
+    c.snapshot_count.push_back(e.count);
+  }
+  return c;
+}
 void H5Output::set_flush_seconds(double seconds) { impl_->flush_seconds = seconds; }
 double H5Output::flush_seconds() const { return impl_->flush_seconds; }
 bool H5Output::is_open() const { return impl_->file.valid(); }
@@ -612,6 +860,9 @@ void InstallStopHandlers() {
   action.sa_flags = SA_RESTART;
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  // Past a file size limit (ulimit -f) a write fails with EFBIG, reported as any failed write,
+  // instead of the signal killing the process with the output half flushed.
+  std::signal(SIGXFSZ, SIG_IGN);
 }
 
 bool StopRequested() { return g_stop_signal != 0; }

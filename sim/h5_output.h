@@ -11,31 +11,56 @@
 //                           connectivity int64 (N) = 0..N-1; all in persistent-id order, SI units
 //   <name>.xdmf             next to <name>.h5: XDMF3 temporal collection of the snapshots
 //
-// Crash safety: the file is written in HDF5's single-writer/multiple-reader (SWMR) mode, so
-// everything up to the last Flush() stays readable even if the process is SIGKILLed (tested).
-// HDF5 1.10 then marks the file as "open for writing": open it with SWMR read
-// (h5py: File(path, "r", swmr=True); C: H5F_ACC_RDONLY | H5F_ACC_SWMR_READ) or clear the mark with
-// `h5clear -s file.h5` (Debian package hdf5-tools) before opening it in ParaView. A clean Close()
-// (also after SIGINT/SIGTERM, see StopRequested) leaves a plain file. Partial chunks at the end of
-// a series are stored unfiltered until they fill up (H5D_CHUNK_DONT_FILTER_PARTIAL_CHUNKS): SWMR
-// never reuses the space of a rewritten chunk, and this bounds that leak to one uncompressed chunk
-// per chunk instead of one per flush.
+// Crash safety (ARCHITECTURE.md "Crash-safe output"): the file is written in HDF5's
+// single-writer/multiple-reader (SWMR) mode, whose ordered metadata writes keep every prefix of
+// the writes a consistent file, through a file driver that keeps the superblock on disk that of a
+// closed file. A run killed at any moment (SIGKILL included) leaves a file that opens as any other
+// (h5py, h5dump, ParaView; no h5clear) with every row up to its last Flush(). Rows reach the file
+// only in Flush() (MaybeFlush: every flush_seconds or at a chunk's worth of rows; a snapshot;
+// Close()),
+// so a dataset's row count never runs ahead of its rows. A write that fails (disk full, file size
+// limit) stops all writing: the file keeps its last flush and the error (OutputError) says which
+// file, how much it holds and which rows it keeps. One writer at a time: a second H5Output on the
+// same path is refused (sim::InputError). Partial chunks at the end of a series are stored
+// unfiltered until they fill up (H5D_CHUNK_DONT_FILTER_PARTIAL_CHUNKS): SWMR never reuses the
+// space of a rewritten chunk, and this bounds that leak to one uncompressed chunk per chunk
+// instead of one per flush.
 #pragma once
 
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "dem/system.h"
 
 namespace sim {
 
+// A write of the output failed; what() is the one line to print (file, size, rows kept).
+class OutputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Where an output stands after a flush: the rows of each series and the snapshots (a run's
+// checkpoint keeps it; a resumed run's output is made again up to it).
+struct OutputCursor {
+  std::vector<std::pair<std::string, int64_t>> rows;  // dataset path, rows
+  std::vector<double> snapshot_time;                  // [s], one per snapshot
+  std::vector<int64_t> snapshot_count;                // particles of each
+};
+
 class H5Output {
  public:
-  // Creates (truncates) `path` and its parent folders and writes the root attributes.
-  // Throws sim::InputError naming the path when the file cannot be created.
+  // Creates (truncates) `path` and its parent folders and writes the root attributes. With
+  // `resume`, the new file first takes from the file now at `path` the rows and snapshots the
+  // cursor names (InputError when that file holds fewer). Throws sim::InputError naming the path
+  // when the file cannot be created or another process writes it (the lock is held until
+  // Close()).
   H5Output(const std::string& path, const std::string& scene_yaml, const std::string& version,
-           double flush_seconds = 10.0);
+           double flush_seconds = 10.0, const OutputCursor* resume = nullptr);
   ~H5Output();  // Close(); errors are swallowed (call Close() to see them)
   H5Output(const H5Output&) = delete;
   H5Output& operator=(const H5Output&) = delete;
@@ -58,13 +83,19 @@ class H5Output {
   // (created as needed) instead of the root. "" returns to the root. Snapshots stay at the root.
   void SetGroup(const std::string& group);
 
-  // Flush() if at least flush_seconds of wall time have passed since the last flush; returns
-  // whether it flushed. Cheap enough to call every step.
+  // Flush() if at least flush_seconds of wall time have passed since the last flush or a series
+  // holds a chunk's worth of rows; returns whether it flushed. Cheap enough to call every step;
+  // call it between steps (rows appended since reach the file only in a flush).
   bool MaybeFlush();
   // Writes the buffered rows and flushes the file to disk.
   void Flush();
-  // Writes everything and closes the file; idempotent. After it the file is complete.
+  // Writes everything and closes the file; idempotent. After it the file is complete. After a
+  // failed write it only closes (throws nothing more).
   void Close();
+  // A write failed (OutputError was thrown): nothing more is written.
+  bool failed() const;
+  // Flush()es and says where the file stands.
+  OutputCursor Cursor();
 
   void set_flush_seconds(double seconds);
   double flush_seconds() const;
@@ -73,7 +104,7 @@ class H5Output {
   std::string xdmf_path() const;
   int64_t snapshot_count() const;
   // False when the file system refused SWMR mode and the file was created without it (still
-  // flushed, but then a SIGKILL can corrupt the last flushed chunks).
+  // flushed, but then a SIGKILL can leave metadata half written).
   bool swmr() const;
 
  private:
@@ -83,7 +114,8 @@ class H5Output {
 
 // Graceful stop on SIGINT/SIGTERM: the handler only sets a flag (volatile sig_atomic_t); the run
 // loop polls StopRequested(), closes its output and exits. A second signal of either kind
-// terminates the process at once (default action).
+// terminates the process at once (default action). SIGXFSZ is ignored: a write past the file
+// size limit fails (EFBIG) and is reported as any failed write.
 void InstallStopHandlers();
 bool StopRequested();
 int StopSignal();         // the signal that asked to stop (SIGINT, SIGTERM), 0 if none

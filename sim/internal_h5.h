@@ -55,11 +55,30 @@ class Handle {
 hid_t CheckId(hid_t id, const std::string& what);
 void CheckOk(herr_t status, const std::string& what);
 
+// Creates the parent folders of `path`; throws sim::InputError naming the path on failure.
+void MakeParentFolders(const std::string& path);
+
 // Creates the parent folders of `path` and the file itself (truncating). With `swmr`, the file
-// uses the 1.10 format and single-writer/multiple-reader mode, which keeps everything flushed
-// readable after a SIGKILL (see H5Output); *got_swmr says whether that mode could be had.
-// Throws sim::InputError naming the path when the file cannot be created.
+// uses the 1.10 format, single-writer/multiple-reader mode and the clean-header driver, which
+// keeps everything flushed readable by any reader after a SIGKILL (see H5Output); *got_swmr says
+// whether that mode could be had. Turns off HDF5's printing of its error stack (every call is
+// checked and reported on one line). Throws sim::InputError naming the path when the file cannot
+// be created.
 Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr);
+
+// The clean-header file driver (h5_clean_driver.cpp): POSIX I/O that keeps the superblock on disk
+// that of a closed file (consistency flags clear, end-of-file address covering every write), and
+// drops every write after the first failed one (the file stays as it was then). Registered on
+// first use.
+hid_t CleanHeaderDriver();
+// What the driver saw of a file it has open.
+struct CleanDriverState {
+  bool failed = false;     // a write failed (the file stays as it was then)
+  int error = 0;           // its errno (ENOSPC, EFBIG, EIO, ...)
+  uint64_t file_size = 0;  // bytes in the file [B]
+};
+// That of an open file of this driver, live until the file is closed; nullptr for another driver.
+const CleanDriverState* CleanDriverStateOf(hid_t file);
 
 // Root or object attributes; an existing attribute of that name is replaced. Strings are stored
 // as variable-length UTF-8.

@@ -4,8 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <stdexcept>
 
+#include "dem/archive.h"
 #include "sim/bed_io.h"
 #include "sim/exit_status.h"
 #include "sim/progress.h"
@@ -65,19 +67,50 @@ void World::LoadState(const std::string& path) {
   sleep_applied_ = true;
 }
 
+void World::KeepPour(const std::string& path) { pour_file_ = path; }
+
 int World::Pour(bool quiet, SettleReport* report) {
+  namespace fs = std::filesystem;
+  // A pour this scene left unfinished in the keep file goes on from there.
+  PourPoint point;
+  if (!pour_file_.empty() && ReadPourPoint(pour_file_, scene_.yaml_text, &point)) {
+    sim::LoadBed(pour_file_, system_.get());
+    system_->Canonicalize();
+    Status("scoopsim: the pour goes on from %s: %lld of %lld bodies poured (layer %d)\n",
+           pour_file_.c_str(), static_cast<long long>(point.poured),
+           static_cast<long long>(scene_.bed.count), point.layers);
+  }
   Progress progress("bed", scene_.bed.settle_max_time, quiet);
   progress.set_open_ended(true);  // settling ends when the bed is at rest, often well before
   const double t0 = system_->time();
   auto particle_steps = [&] {
     return system_->step_count() * static_cast<int64_t>(system_->particles().size());
   };
+  // The bed so far goes to the keep file every output.flush_seconds and when stopped.
+  auto last_keep = std::chrono::steady_clock::now();
+  auto keep = [&] {
+    SaveBed(pour_file_, *system_, scene_.yaml_text, &point);
+    last_keep = std::chrono::steady_clock::now();
+  };
   SettleReport& r = *report;
-  r = FillAndSettle(scene_, system_.get(), [&](const dem::System& s) {
-    progress.Update(s.time() - t0, particle_steps());
-    return !StopRequested();
-  });
+  r = FillAndSettle(
+      scene_, system_.get(),
+      [&](const dem::System& s) {
+        progress.Update(s.time() - t0, particle_steps());
+        if (!pour_file_.empty() && point.started && !StopRequested() &&
+            Seconds(std::chrono::steady_clock::now() - last_keep) >= scene_.output.flush_seconds)
+          keep();
+        return !StopRequested();
+      },
+      &point);
   progress.Finish(system_->time() - t0, particle_steps());
+  if (!pour_file_.empty() && StopRequested() && point.started && r.status.ok()) {
+    keep();
+    Status("scoopsim: the bed poured so far (%lld of %lld bodies) is in %s; the same command goes "
+           "on from it\n",
+           static_cast<long long>(point.poured), static_cast<long long>(scene_.bed.count),
+           pour_file_.c_str());
+  }
   int status = kExitOk;
   if (!r.status.ok()) {
     Status("scoopsim: simulation unstable: %s\n", r.status.message.c_str());
@@ -98,13 +131,87 @@ int World::Pour(bool quiet, SettleReport* report) {
   }
   // Storage and lists a function of positions and ids alone, ready to save or run.
   system_->Canonicalize();
+  if (!pour_file_.empty()) {
+    std::error_code ignored;
+    fs::remove(pour_file_, ignored);  // finished: nothing to go on from
+    fs::remove(fs::path(pour_file_).replace_extension(".xdmf"), ignored);
+  }
   return status;
 }
 
-void World::OpenOutput(const std::string& path) {
+void World::OpenOutput(const std::string& path, const OutputCursor* resume) {
   owned_out_ = std::make_unique<H5Output>(path, scene_.yaml_text, SCOOPSIM_VERSION,
-                                          scene_.output.flush_seconds);
+                                          scene_.output.flush_seconds, resume);
   out_ = owned_out_.get();
+}
+
+template <typename Archive>
+void World::LoopFields(Archive& a) {
+  a(started_);
+  a(sleep_applied_);
+  a(t_start_);
+  a(next_row_);
+  a(step0_);
+  a(particle_steps_);
+  a(summary_.peak_force);
+  a(summary_.mean_force);
+  a(summary_.peak_torque);
+  a(summary_.peak_overlap);
+  a(summary_.collected_mass);
+  a(summary_.particles);
+  a(summary_.steps);
+  a(summary_.simulated);
+  if (!dig_) return;
+  Dig& d = *dig_;
+  a(d.pass_t0);
+  a(d.next_row);
+  a(d.touched);
+  a(d.com_contact);
+  a(d.rho);
+  a(d.wrench);
+  a(d.force_sum);
+  a(d.force_rows);
+  a(d.planned);
+  a(d.bed.start_time);
+}
+
+Checkpoint World::MakeCheckpoint() {
+  Checkpoint c;
+  std::error_code ec;
+  const std::filesystem::path absolute = std::filesystem::absolute(scene_.path, ec);
+  c.scene_path = ec ? scene_.path : absolute.string();  // resumable from any folder
+  c.scene_yaml = scene_.yaml_text;
+  c.time = system_->time();
+  if (out_) c.output_state = EncodeCursor(out_->Cursor());
+  c.dem_state = system_->SaveState();
+  dem::ArchiveWriter a;
+  const uint8_t dig = dig_ != nullptr;
+  const DigResume at = dig ? ResumePoint() : DigResume{};
+  a(dig);
+  a(at);
+  LoopFields(a);
+  c.world_state = a.bytes();
+  return c;
+}
+
+void World::ResumeFrom(const Checkpoint& c, std::unique_ptr<ScoopDriver> driver,
+                       const std::string& source) {
+  try {
+    dem::ArchiveReader a(c.world_state);
+    uint8_t dig = 0;
+    DigResume at;
+    a(dig);
+    a(at);
+    if ((dig != 0) != (driver != nullptr))
+      throw std::runtime_error(dig ? "a dig's checkpoint, the scene has none"
+                                   : "a plain run's checkpoint, the scene has a dig");
+    if (dig) StartDig(std::move(driver), &at);
+    system_->RestoreState(c.dem_state);
+    LoopFields(a);
+    if (!a.done()) throw std::runtime_error("/world_state: bytes left over");
+  } catch (const std::runtime_error& e) {
+    throw InputError(source + ": " + e.what());
+  }
 }
 
 void World::UseOutput(H5Output* out) {
@@ -291,7 +398,9 @@ dem::StepStatus OutputFailed(double time, const std::exception& e) {
   dem::StepStatus status;
   status.flags = kOutputFailed;
   status.time = time;
-  status.message = std::string("output failed: ") + e.what();
+  char at[64];
+  std::snprintf(at, sizeof at, "output failed at t = %.6g s: ", time);
+  status.message = at + std::string(e.what());
   return status;
 }
 
@@ -423,11 +532,21 @@ RunResult World::Run(const RunControl& control) {
 
   RunResult result;
   control_ = &control;
+  auto last_checkpoint = std::chrono::steady_clock::now();
+  if (control.checkpoint_every > 0) {
+    // One at the start: a run killed before its first period (after a long pour, say) resumes.
+    try {
+      WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+    } catch (const std::exception& e) {
+      Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+      result.exit_status = kExitFailure;
+    }
+  }
   if (halted_after_pass_ > 0) {  // an earlier Run() stopped between passes: go on
     halted_after_pass_ = 0;
     if (!Done()) BeginPass();
   }
-  while (!Done()) {
+  while (!Done() && result.exit_status == kExitOk) {
     const dem::StepStatus status = Step();
     if (status.flags & kOutputFailed) {
       Status("scoopsim: %s\n", status.message.c_str());
@@ -445,10 +564,38 @@ RunResult World::Run(const RunControl& control) {
       break;
     }
     const int64_t steps = system.step_count() - step0_;
+    // Every step (a clock read): a killed run loses at most flush_seconds of rows, however long
+    // its steps take.
+    if (out_) {
+      try {
+        out_->MaybeFlush();
+      } catch (const std::exception& e) {
+        Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+        result.exit_status = kExitFailure;
+        break;
+      }
+    }
     if (steps % 64 == 0) {
-      if (out_) out_->MaybeFlush();
       progress.Update(system.time() - t_start_, particle_steps_);
+      if (control.checkpoint_every > 0 &&
+          Seconds(std::chrono::steady_clock::now() - last_checkpoint) >= control.checkpoint_every) {
+        try {
+          WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+        } catch (const std::exception& e) {
+          Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+          result.exit_status = kExitFailure;
+          break;
+        }
+        last_checkpoint = std::chrono::steady_clock::now();
+      }
       if (StopRequested()) {
+        if (control.checkpoint_every > 0) {  // go on from here, not from the last checkpoint
+          try {
+            WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+          } catch (const std::exception& e) {
+            Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+          }
+        }
         Status("scoopsim: stopped by signal %d at t = %.6g s; output closed\n", StopSignal(),
                system.time());
         result.exit_status = kExitStopped;
@@ -479,18 +626,29 @@ RunResult World::Run(const RunControl& control) {
            summary_.simulated / std::max(result.wall, 1e-9),
            PhaseBreakdown(PhasesSince(system.phase_times(), phases0), result.wall).c_str());
     try {
-      dig_->driver->Finish(out_);  // the driver's own summary (the arm's table)
+      dig_->driver->Finish(out_ != nullptr && !out_->failed() ? out_ : nullptr);
     } catch (const std::exception& e) {
       Status("scoopsim: output failed: %s\n", e.what());
       result.exit_status = kExitFailure;
     }
   }
   if (owned_out_) {
-    owned_out_->SetStateHash(system.StateHash());
-    owned_out_->SetAttribute("time", system.time());
-    owned_out_->Close();
-    Status("scoopsim: wrote %s (ParaView: %s)\n", owned_out_->path().c_str(),
-           owned_out_->xdmf_path().c_str());
+    // After a failed write the file keeps its last flush (the message said so): only close it.
+    try {
+      if (!owned_out_->failed()) {
+        owned_out_->SetStateHash(system.StateHash());
+        owned_out_->SetAttribute("time", system.time());
+      }
+      const bool failed = owned_out_->failed();
+      owned_out_->Close();
+      if (!failed) {
+        Status("scoopsim: wrote %s (ParaView: %s)\n", owned_out_->path().c_str(),
+               owned_out_->xdmf_path().c_str());
+      }
+    } catch (const std::exception& e) {
+      if (result.exit_status != kExitFailure) Status("scoopsim: output failed: %s\n", e.what());
+      result.exit_status = kExitFailure;
+    }
   }
   return result;
 }

@@ -19,6 +19,7 @@
 
 #include "dem/system.h"
 #include "sim/bed.h"
+#include "sim/checkpoint.h"
 #include "sim/dig.h"
 #include "sim/h5_output.h"
 #include "sim/scene.h"
@@ -56,6 +57,10 @@ struct RunControl {
   // stop the run at that point (RunResult::stopped_at_pass). It may throw: the run then stops as
   // for an output failure (exit status 1, the message printed).
   std::function<bool(int pass)> on_pass_end;
+  // At the start and every checkpoint_every seconds of wall time (0: never), between steps, the
+  // output is flushed and the run's whole state written to checkpoint_path (sim/checkpoint.h).
+  double checkpoint_every = 0;  // [s]
+  std::string checkpoint_path;
 };
 
 // Where a dig starts when it does not start at its first pass: a dig resumed from the bed that
@@ -90,9 +95,14 @@ class World {
   // flags, then the storage made canonical, so a plain run continues it with no further rebuild.
   void LoadState(const std::string& path);
   int Pour(bool quiet, SettleReport* report);
+  // Pour() keeps the bed poured so far in `path` (a saved bed with its sim::PourPoint) every
+  // output.flush_seconds of wall time and when stopped by a signal, goes on from it when it holds
+  // an unfinished pour of this scene, and removes it once the pour has ended.
+  void KeepPour(const std::string& path);
 
-  // Outputs: a file of its own (created now), or a shared one (a study's groups).
-  void OpenOutput(const std::string& path);
+  // Outputs: a file of its own (created now; with `resume`, made again up to that cursor from
+  // the file at `path`, see H5Output), or a shared one (a study's groups).
+  void OpenOutput(const std::string& path, const OutputCursor* resume = nullptr);
   void UseOutput(H5Output* out);
   H5Output* output() { return out_; }
 
@@ -103,6 +113,16 @@ class World {
   // The pass the dig is at (the next one, between passes) and the surface and clearance of its
   // first pass: what StartDig needs to resume from a bed saved now. Only during a dig.
   DigResume ResumePoint() const;
+
+  // The run's whole state between two steps (the output flushed first), and a world set up as
+  // this one was (same scene, output opened with the checkpoint's cursor, nothing else done)
+  // made to go on from it: with `driver` (a dig), StartDig(driver) at the checkpoint's pass,
+  // then the DEM state and the loop's own. Run() then writes what the uninterrupted run would
+  // have, bit for bit. ResumeFrom throws sim::InputError naming `source` when the state does not
+  // fit this world.
+  Checkpoint MakeCheckpoint();
+  void ResumeFrom(const Checkpoint& checkpoint, std::unique_ptr<ScoopDriver> driver,
+                  const std::string& source);
 
   // One step: the driver's motion for the end of the step, the DEM step, the wrench back to the
   // driver, output rows; at a pass's end the sample is taken out and the next pass begins. After
@@ -133,6 +153,9 @@ class World {
   void EndPass();
   void AddObstacles();  // scene.obstacles as fixed meshes (at StartDig)
   WorldView View() const;
+  // Lists the loop's own state: counters, summaries and, in a dig, its pass bookkeeping.
+  template <typename Archive>
+  void LoopFields(Archive& archive);
 
   Scene scene_;
   std::unique_ptr<dem::System> system_;
@@ -149,6 +172,7 @@ class World {
   std::vector<int> obstacle_meshes_;      // mesh indices of scene.obstacles
   const RunControl* control_ = nullptr;  // during Run(): its on_pass_end
   int halted_after_pass_ = 0;            // on_pass_end returned false after this pass
+  std::string pour_file_;                // KeepPour
 };
 
 }  // namespace sim

@@ -3,7 +3,7 @@
 set -euo pipefail
 PKGS=(
   build-essential cmake pkg-config git
-  libyaml-cpp-dev libcli11-dev libhdf5-dev zlib1g-dev libassimp-dev
+  libyaml-cpp-dev libcli11-dev libhdf5-dev hdf5-tools zlib1g-dev libassimp-dev
   libgtest-dev googletest
   python3 python3-numpy python3-h5py python3-matplotlib
   openmpi-bin libopenmpi-dev

@@ -26,6 +26,7 @@
 #include "render/camera.h"
 #include "render/frames.h"
 #include "render/saved_run.h"
+#include "sim/checkpoint.h"
 #include "sim/commands.h"
 #include "sim/exit_status.h"
 #include "sim/saved_run.h"
@@ -47,12 +48,6 @@ std::string OneLine(std::string message) {
   return message;
 }
 
-// Creates the folder an output file goes into (nothing to do for a bare file name).
-void MakeParentDirectories(const std::string& output) {
-  const std::filesystem::path parent = std::filesystem::path(output).parent_path();
-  if (!parent.empty()) std::filesystem::create_directories(parent);
-}
-
 // Options shared by `bed` and `run`.
 struct SceneCommand {
   std::string scene;
@@ -60,12 +55,17 @@ struct SceneCommand {
   int threads = 0;
   bool quiet = false;
   CLI::Option* threads_option = nullptr;
+  CLI::Option* scene_option = nullptr;
+  CLI::Option* output_option = nullptr;
 
   void AddTo(CLI::App* command, const std::string& default_output) {
     output = default_output;
-    command->add_option("SCENE", scene, "Scene file (YAML), e.g. scenes/default.yaml")->required();
-    command->add_option("-o,--output", output, "Output HDF5 file (parent folders are created)")
-        ->capture_default_str();
+    scene_option =
+        command->add_option("SCENE", scene, "Scene file (YAML), e.g. scenes/default.yaml")
+            ->required();
+    output_option =
+        command->add_option("-o,--output", output, "Output HDF5 file (parent folders are created)")
+            ->capture_default_str();
     threads_option =
         command
             ->add_option("--threads", threads,
@@ -164,6 +164,17 @@ int Main(int argc, char** argv) {
                   "Stop after this many simulated seconds, the output closed as on SIGINT "
                   "(default: at the scene's end)")
       ->check(CLI::PositiveNumber);
+  double run_checkpoint_every = 0;
+  run->add_option("--checkpoint-every", run_checkpoint_every,
+                  "Keep the run's whole state in OUT.restart.h5 every this many seconds of wall "
+                  "time (and when stopped by a signal); removed when the run ends")
+      ->check(CLI::PositiveNumber);
+  std::string run_resume;
+  run->add_option("--resume", run_resume,
+                  "Go on from OUT.restart.h5 of this output (SCENE, if given, must be the one it "
+                  "was made from); the output ends as the uninterrupted run's")
+      ->option_text("OUT.h5");
+  run_args.scene_option->required(false);
   FramesArgs run_frames;
   run_frames.AddTo(run, false, true);
 
@@ -277,14 +288,30 @@ int Main(int argc, char** argv) {
   try {
     if (*bed) {
       const sim::Scene scene = sim::LoadScene(bed_args.scene);
-      MakeParentDirectories(bed_args.output);
       return sim::MakeBed(scene, bed_args.Options(scene));
     }
     if (*run) {
-      const sim::Scene scene = sim::LoadScene(run_args.scene);
-      MakeParentDirectories(run_args.output);
+      if (run_args.scene.empty() && run_resume.empty())
+        throw sim::InputError("run: SCENE: expected a scene file (or --resume OUT.h5)");
+      if (!run_resume.empty() && run_args.output_option->count() > 0 &&
+          run_args.output != run_resume)
+        throw sim::InputError("run: -o " + run_args.output + " and --resume " + run_resume +
+                              ": a resumed run writes the output it resumes; give one of them");
+      // Resumed without SCENE: the scene text and path its checkpoint holds.
+      const sim::Scene scene =
+          !run_args.scene.empty()
+              ? sim::LoadScene(run_args.scene)
+              : [&] {
+                  const sim::Checkpoint c = sim::ReadCheckpoint(sim::CheckpointPath(run_resume));
+                  return sim::LoadSceneText(c.scene_path, c.scene_yaml);
+                }();
       sim::RunOptions options = run_args.Options(scene);
       options.stop_after = run_stop_after;
+      options.checkpoint_every = run_checkpoint_every;
+      if (!run_resume.empty()) {
+        options.resume = true;
+        options.output = run_resume;
+      }
       std::unique_ptr<render::FrameSequence> frames;
       if (!run_frames.dir.empty()) {
         // Rendering happens inside the run loop's frame callback, between steps: the DEM's
@@ -317,7 +344,6 @@ int Main(int argc, char** argv) {
     }
     if (*shape) {
       const sim::Scene scene = sim::LoadScene(shape_args.scene);
-      MakeParentDirectories(shape_args.output);
       const sim::RunOptions run = shape_args.Options(scene);
       sim::ShapeStudyOptions options;
       options.threads = run.threads;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -597,10 +598,9 @@ TEST_F(H5Test, SigtermClosesTheFileCleanly) {
             h5::HexHash(static_cast<uint64_t>(rows)));
 }
 
-// SIGKILL at several moments after flushes: the file still opens (with SWMR read, as documented
-// in h5_output.h, since HDF5 1.10 marks a file killed during SWMR writing as still open), and
-// every row flushed before the kill is there with its exact values, as are the snapshots the
-// sidecar lists.
+// SIGKILL at several moments after flushes: the file opens as any closed file (no SWMR read, no
+// h5clear: the clean-header driver keeps the superblock that of a closed file), and every row
+// flushed before the kill is there with its exact values, as are the snapshots the sidecar lists.
 TEST_F(H5Test, SigkillKeepsTheFlushedRows) {
   for (int trial = 0; trial < 6; ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial));
@@ -616,12 +616,89 @@ TEST_F(H5Test, SigkillKeepsTheFlushedRows) {
     ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
     const int64_t flushed = LastReport(child.report_fd, first);
 
-    Handle file = OpenFile(path, H5F_ACC_RDONLY | H5F_ACC_SWMR_READ);
+    Handle file = OpenFile(path);
     ASSERT_TRUE(file.valid()) << "file unreadable after SIGKILL";
     EXPECT_GE(
         CheckRows(file.get(), flushed, ReadText(Path("run" + std::to_string(trial) + ".xdmf"))),
         flushed);
   }
+}
+
+// A second writer of the same file is refused (InputError naming it) while the first holds it;
+// the first writes on and closes a complete file, after which the path is free again.
+TEST_F(H5Test, SecondWriterIsRefused) {
+  const std::string path = Path("run.h5");
+  {
+    H5Output first(path, "scene", "v");
+    const double row = 1;
+    first.AppendRow("/series/t", &row, 1);
+    try {
+      H5Output second(path, "scene", "v");
+      ADD_FAILURE() << "a second writer was let in";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(path + ": another process"), std::string::npos)
+          << e.what();
+    }
+    first.AppendRow("/series/t", &row, 1);
+  }
+  Handle file = OpenFile(path);
+  ASSERT_TRUE(file.valid());
+  EXPECT_EQ(ReadDoubles(file.get(), "/series/t"), (std::vector<double>{1, 1}));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1)
+      << "no temporary file left beside it";  // run.h5 only (no snapshot, no sidecar)
+  H5Output again(path, "scene", "v");  // free once closed
+}
+
+// A write that fails (here the file size limit, RLIMIT_FSIZE, as a full disk would) throws
+// OutputError once with one line naming the file, the reason and the rows kept; nothing more is
+// written, and the file opens with every row it claims, each with its exact value.
+TEST_F(H5Test, FailedWriteKeepsTrueRowCounts) {
+  const std::string path = Path("full.h5");
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(fds[0]);
+    std::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{200000, 200000};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+    std::string message = "no failure";
+    try {
+      H5Output out(path, "scene", "v", /*flush_seconds=*/0.0);
+      const dem::Particles particles = MakeParticles(100, 0.0);
+      for (int64_t rows = 0; rows < 10000000; ++rows) {
+        const double r = static_cast<double>(rows);
+        const double row[3] = {r, 2 * r, 3 * r};
+        out.AppendRow("/series/a", row, 3);
+        out.AppendRow("/series/t", &r, 1);
+        if (rows % 100 == 99) out.MaybeFlush();
+        if (rows % 1000 == 999) out.WriteSnapshot(r, particles);
+      }
+    } catch (const OutputError& e) {
+      message = e.what();
+    } catch (const std::exception& e) {
+      message = std::string("other error: ") + e.what();
+    }
+    ::write(fds[1], message.data(), message.size());
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  std::string message;
+  char buffer[512];
+  for (ssize_t n; (n = ::read(fds[0], buffer, sizeof buffer)) > 0;) message.append(buffer, n);
+  ::close(fds[0]);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  EXPECT_EQ(message.find(path + ": write failed (File too large)"), 0u) << message;
+  EXPECT_NE(message.find("it keeps the rows of the last flush ("), std::string::npos) << message;
+
+  Handle file = OpenFile(path);
+  ASSERT_TRUE(file.valid()) << "file unreadable after a failed write";
+  const int64_t rows = CheckRows(file.get(), 1, ReadText(Path("full.xdmf")));
+  EXPECT_NE(message.find("(" + std::to_string(rows) + " of /series/"), std::string::npos)
+      << message << "; rows on disk " << rows;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,0 +1,252 @@
+// Checkpoint and resume (sim/checkpoint.h, World::MakeCheckpoint / ResumeFrom) end to end
+// through the binary: a run with --checkpoint-every, SIGKILLed once a checkpoint exists and
+// resumed with --resume, writes the same output, bit for bit (every dataset, the state hash), as
+// the uninterrupted run, for a plain run, a two-pass dig and a bed of clumps, on 1 and 2 threads.
+// A checkpoint of another scene text or format version is refused with one line, exit 2.
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <tuple>
+#include <vector>
+
+#include "tests/cli_util.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using scoopsim_test::ReadText;
+using scoopsim_test::Wait;
+
+fs::path TempDir() {
+  static const fs::path dir = scoopsim_test::ProcessTempDir("checkpoint");
+  return dir;
+}
+
+// The body of each scene (materials, box, step); the kinds below add bed, dig or duration.
+std::string Common() {
+  const std::string source = SCOOPSIM_SOURCE_DIR;
+  return "materials: " + source + "/scenes/materials.yaml\n" + R"(gravity: [0, 0, -1.3]
+time_step: {rayleigh_fraction: 0.25}
+box: {min: [0, 0, 0], max: [0.37, 0.17, 0.2], wall_material: wall}
+sleep: {enabled: true}
+health: {max_overlap: 0.35}
+output: {interval: 1.0e-3, snapshot_every: 1000, flush_seconds: 0.05}
+)";
+}
+
+// tiny_dig's bed of 1450 spheres, made once.
+std::string SphereBed() {
+  static const std::string bed = [] {
+    const fs::path scene = TempDir() / "bed.yaml";
+    std::ofstream(scene) << Common() << R"(neighbor: {skin: 4.0e-3}
+bed: {material: snow, radius: 8.0e-3, count: 1450, seed: 3, fill_fraction: 0.45,
+      settle: {kinetic_energy: 1.0e-8, max_time: 1.0}}
+)";
+    const std::string path = (TempDir() / "bed.h5").string();
+    EXPECT_EQ(
+        scoopsim_test::RunScoopsim("bed " + scene.string() + " -o " + path + " --threads 2 -q"), 0);
+    return path;
+  }();
+  return bed;
+}
+
+std::string WriteScene(const std::string& kind) {
+  const std::string source = SCOOPSIM_SOURCE_DIR;
+  std::ostringstream s;
+  s << Common();
+  if (kind == "clumps") {
+    // Poured in the run (the checkpoints come after the pour), a loose layer still moving.
+    s << R"(bed: {material: ice, clump: tetra4, count: 400, seed: 2, fill_fraction: 0.45,
+      settle: {kinetic_energy: 1.0e-3, max_time: 0.05}}
+duration: 0.4
+)";
+  } else {
+    s << "neighbor: {skin: 4.0e-3}\n"
+      << "bed: {material: snow, radius: 8.0e-3, count: 1450, seed: 3, fill_fraction: 0.45,\n"
+      << "      file: " << SphereBed() << "}\n";
+  }
+  if (kind == "plain") s << "duration: 2.0\n";
+  if (kind == "dig") {
+    // Two short passes: down, along, out.
+    s << "dig:\n  scoop: {mesh: " << source << "/assets/scoop.stl, material: aluminium}\n"
+      << R"(  trajectory:
+    preset: none
+    start: [0.13, 0.085]
+    initial_pitch: 90
+    moves:
+      - {translate: [0, 0, -1], speed: 0.1, distance: 0.02}
+      - {translate: [1, 0, 0], speed: 0.05, distance: 0.03}
+      - {translate: [0, 0, 1], speed: 0.2, distance: 0.08}
+  passes: 2
+  bite_depth: 0.01
+  interval: 1.0e-3
+)";
+  }
+  const fs::path path = TempDir() / (kind + ".yaml");
+  std::ofstream(path) << s.str();
+  return path.string();
+}
+
+pid_t Spawn(const std::string& args, const std::string& log) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = "exec " + std::string(SCOOPSIM_BINARY) + " " + args + " 2>" + log;
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Every dataset of a file by path, as raw bytes in its native type (H5Ovisit).
+std::vector<std::pair<std::string, std::vector<char>>> Datasets(const std::string& path) {
+  std::vector<std::pair<std::string, std::vector<char>>> out;
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return out;
+  H5Ovisit(
+      file, H5_INDEX_NAME, H5_ITER_INC,
+      [](hid_t root, const char* name, const H5O_info_t* info, void* data) -> herr_t {
+        if (info->type != H5O_TYPE_DATASET) return 0;
+        const hid_t d = H5Dopen2(root, name, H5P_DEFAULT);
+        const hid_t type = H5Dget_type(d);
+        const hid_t native = H5Tget_native_type(type, H5T_DIR_ASCEND);
+        const hid_t space = H5Dget_space(d);
+        const hssize_t n = H5Sget_simple_extent_npoints(space);
+        std::vector<char> bytes(static_cast<size_t>(n) * H5Tget_size(native));
+        if (n > 0) H5Dread(d, native, H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data());
+        static_cast<std::vector<std::pair<std::string, std::vector<char>>>*>(data)->emplace_back(
+            name, std::move(bytes));
+        H5Sclose(space);
+        H5Tclose(native);
+        H5Tclose(type);
+        H5Dclose(d);
+        return 0;
+      },
+      &out);
+  H5Fclose(file);
+  return out;
+}
+
+std::string StateHash(const std::string& path) {
+  std::string hash;
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return hash;
+  const hid_t attribute = H5Aopen(file, "state_hash", H5P_DEFAULT);
+  if (attribute >= 0) {
+    const hid_t type = H5Aget_type(attribute);
+    char* text = nullptr;
+    if (H5Aread(attribute, type, &text) >= 0 && text != nullptr) hash = text;
+    H5free_memory(text);
+    H5Tclose(type);
+    H5Aclose(attribute);
+  }
+  H5Fclose(file);
+  return hash;
+}
+
+class ResumeTest : public ::testing::TestWithParam<std::tuple<std::string, int>> {};
+
+TEST_P(ResumeTest, KilledAndResumedRunEqualsTheUninterrupted) {
+  const auto& [kind, threads] = GetParam();
+  const std::string scene = WriteScene(kind);
+  const std::string tag = kind + std::to_string(threads);
+  const std::string common = " --threads " + std::to_string(threads) + " -q";
+  const std::string reference = (TempDir() / (tag + "_reference.h5")).string();
+  const std::string out = (TempDir() / (tag + ".h5")).string();
+  const fs::path restart = TempDir() / (tag + ".restart.h5");
+  const std::string log = (TempDir() / (tag + ".log")).string();
+  ASSERT_EQ(Wait(Spawn("run " + scene + " -o " + reference + common, log)), 0) << ReadText(log);
+
+  // Killed a moment after its second checkpoint (one at the start, then every 0.2 s of wall
+  // time; each replaces the file, a new inode).
+  const pid_t pid = Spawn("run " + scene + " -o " + out + common + " --checkpoint-every 0.2", log);
+  auto inode = [&restart] {
+    struct stat st {};
+    return ::stat(restart.c_str(), &st) == 0 ? st.st_ino : ino_t{0};
+  };
+  ino_t first = 0;
+  for (int k = 0; k < 120000; ++k) {
+    const ino_t now = inode();
+    if (first == 0) first = now;
+    if (now != 0 && now != first) break;
+    if (::waitpid(pid, nullptr, WNOHANG) == pid) FAIL() << "ended before a second checkpoint";
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ::kill(pid, SIGKILL);
+  ASSERT_EQ(Wait(pid), 128 + SIGKILL) << "ended before the kill: " << ReadText(log);
+  ASSERT_TRUE(fs::exists(restart));
+
+  ASSERT_EQ(Wait(Spawn("run --resume " + out + common, log)), 0) << ReadText(log);
+  EXPECT_NE(ReadText(log).find("going on from " + restart.string()), std::string::npos)
+      << ReadText(log);
+  EXPECT_FALSE(fs::exists(restart)) << "kept after the run ended";
+  const auto want = Datasets(reference);
+  const auto got = Datasets(out);
+  ASSERT_GT(want.size(), 10u);
+  ASSERT_EQ(got.size(), want.size());
+  for (size_t k = 0; k < want.size(); ++k) {
+    EXPECT_EQ(got[k].first, want[k].first);
+    EXPECT_TRUE(got[k].second == want[k].second) << want[k].first << " differs";
+  }
+  EXPECT_EQ(StateHash(out), StateHash(reference));
+  EXPECT_EQ(StateHash(out).size(), 16u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Kinds, ResumeTest,
+                         ::testing::Combine(::testing::Values("plain", "dig", "clumps"),
+                                            ::testing::Values(1, 2)),
+                         [](const auto& info) {
+                           return std::get<0>(info.param) + "_" +
+                                  std::to_string(std::get<1>(info.param)) + "_threads";
+                         });
+
+// A checkpoint is refused with one line, exit 2, when the scene given is not the one it was made
+// from, or when its format version is another.
+TEST(CheckpointTest, MismatchIsRefused) {
+  const std::string scene = WriteScene("plain");
+  const std::string out = (TempDir() / "mismatch.h5").string();
+  const std::string restart = (TempDir() / "mismatch.restart.h5").string();
+  const std::string log = (TempDir() / "mismatch.log").string();
+  // A checkpoint kept by SIGINT (written when stopped), then the scene changed.
+  const pid_t pid =
+      Spawn("run " + scene + " -o " + out + " --threads 1 -q --checkpoint-every 100", log);
+  for (int k = 0; k < 60000 && !fs::exists(out); ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ::kill(pid, SIGINT);
+  ASSERT_EQ(Wait(pid), 130) << ReadText(log);
+  ASSERT_TRUE(fs::exists(restart)) << ReadText(log);
+  std::ofstream(scene, std::ios::app) << "# changed\n";
+  EXPECT_EQ(scoopsim_test::RunScoopsim("run " + scene + " --resume " + out + " -q", log), 2);
+  std::string text = ReadText(log);
+  EXPECT_EQ(text, "scoopsim: " + restart + ": made from another scene text than " + scene +
+                      "'s (changed since?); resume with the scene it was made from\n");
+  // Another format version.
+  const hid_t file = H5Fopen(restart.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const double other = 99;
+  const hid_t attribute = H5Aopen(file, "format_version", H5P_DEFAULT);
+  H5Awrite(attribute, H5T_NATIVE_DOUBLE, &other);
+  H5Aclose(attribute);
+  H5Fclose(file);
+  EXPECT_EQ(scoopsim_test::RunScoopsim("run --resume " + out + " -q", log), 2);
+  text = ReadText(log);
+  EXPECT_EQ(text.find("scoopsim: " + restart + ": attribute format_version: expected 1, got 99"),
+            0u)
+      << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+}
+
+}  // namespace

@@ -1,0 +1,327 @@
+// What `scoopsim run` and `scoopsim bed` leave behind when things go wrong (sim/commands.cpp,
+// sim/h5_output.cpp), end to end through the binary on tiny_dig (1450 spheres): a run SIGKILLed
+// at random moments leaves a file that plain HDF5 readers open (C API, h5py, h5dump) holding a
+// prefix of the uninterrupted run's rows, at least those a reader saw before the kill; a second
+// run given the same output and `-o` naming the scene's own bed are refused before any work; a
+// full disk (the file size limit, RLIMIT_FSIZE) gives one line and a file whose row counts are
+// true; a pour stopped by SIGINT or SIGKILL is kept and the same command goes on from it.
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tests/cli_util.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using scoopsim_test::ReadText;
+using scoopsim_test::Wait;
+
+fs::path TempDir() {
+  static const fs::path dir = scoopsim_test::ProcessTempDir("run_output");
+  return dir;
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+// tiny_dig with absolute paths, the given bed file (or none: the run pours), snapshots every 2000
+// steps and the given flush period.
+std::string WriteScene(const std::string& name, const std::string& bed_file, double flush) {
+  const std::string source = SCOOPSIM_SOURCE_DIR;
+  std::string text = ReadText(source + "/scenes/tiny_dig.yaml");
+  auto replace = [&text](const std::string& from, const std::string& to) {
+    const size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  };
+  replace("materials: materials.yaml", "materials: " + source + "/scenes/materials.yaml");
+  replace("../assets/scoop.stl", source + "/assets/scoop.stl");
+  if (!bed_file.empty()) replace("  seed: 3\n", "  seed: 3\n  file: " + bed_file + "\n");
+  text +=
+      "output: {interval: 1.0e-3, snapshot_every: 2000, flush_seconds: " + std::to_string(flush) +
+      "}\n";
+  const fs::path path = TempDir() / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+// Starts `scoopsim ARGS...` (one DEM thread) with stderr to `stderr_file`; with fsize_limit > 0,
+// under that file size limit [B]. Returns its pid.
+pid_t Spawn(std::vector<std::string> args, const std::string& stderr_file, rlim_t fsize_limit = 0) {
+  args.insert(args.begin(), SCOOPSIM_BINARY);
+  args.insert(args.end(), {"--threads", "1", "-q"});
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::freopen(stderr_file.c_str(), "w", stderr);
+    if (fsize_limit > 0) {
+      const rlimit limit{fsize_limit, fsize_limit};
+      ::setrlimit(RLIMIT_FSIZE, &limit);
+    }
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Exit status, or 128 + signal.
+void WaitForFile(const fs::path& path, pid_t pid) {
+  for (int k = 0; k < 20000 && !fs::exists(path); ++k) {
+    if (::waitpid(pid, nullptr, WNOHANG) == pid) FAIL() << "ended before writing " << path;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+}
+
+// The datasets compared between runs: every /scoop and /series row of a dig.
+const char* const kSeries[] = {"/scoop/time",           "/scoop/pass",        "/scoop/rho",
+                               "/scoop/pose",           "/scoop/force_world", "/scoop/torque_body",
+                               "/scoop/contacts",       "/series/time",       "/series/awake",
+                               "/series/kinetic_energy"};
+
+// All values of a dataset of doubles and its row count; rows -1 when the file or the dataset
+// cannot be read with a plain read-only open.
+struct Rows {
+  std::vector<double> values;
+  int64_t rows = -1;
+};
+
+Rows ReadRows(const std::string& path, const std::string& name) {
+  Rows r;
+  hid_t file = -1, dataset = -1;
+  H5E_BEGIN_TRY {
+    file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (file >= 0) dataset = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+    if (dataset >= 0) {
+      const hid_t space = H5Dget_space(dataset);
+      hsize_t dims[2] = {0, 1};
+      const int rank = H5Sget_simple_extent_dims(space, dims, nullptr);
+      H5Sclose(space);
+      r.values.resize(dims[0] * (rank == 2 ? dims[1] : 1));
+      if (r.values.empty() ||
+          H5Dread(dataset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, r.values.data()) >= 0)
+        r.rows = static_cast<int64_t>(dims[0]);
+    }
+  }
+  H5E_END_TRY;
+  if (dataset >= 0) H5Dclose(dataset);
+  if (file >= 0) H5Fclose(file);
+  return r;
+}
+
+// Whether the file opens and reads in full with plain h5py (no swmr=True) and, when installed,
+// h5dump (the whole file).
+void ExpectPlainReadersOpen(const std::string& path) {
+  const std::string h5py =
+      "/usr/bin/python3 -c \"import h5py, sys; f = h5py.File(sys.argv[1], 'r'); "
+      "f.visititems(lambda n, o: o[()] if isinstance(o, h5py.Dataset) else None)\" " +
+      path + " 2>/dev/null";
+  EXPECT_EQ(std::system(h5py.c_str()), 0) << "h5py cannot read " << path;
+  if (std::system("command -v h5dump >/dev/null 2>&1") == 0) {
+    const std::string h5dump = "h5dump " + path + " >/dev/null 2>&1";
+    EXPECT_EQ(std::system(h5dump.c_str()), 0) << "h5dump cannot read " << path;
+  }
+}
+
+// Every series of `path` is a prefix of the reference run's (bit for bit), all /scoop series of
+// one length; returns the /scoop/time rows.
+int64_t ExpectPrefixOf(const std::string& path, const std::string& reference) {
+  int64_t scoop_rows = -1;
+  for (const char* name : kSeries) {
+    const Rows got = ReadRows(path, name);
+    const Rows ref = ReadRows(reference, name);
+    EXPECT_GE(got.rows, 0) << path << ": " << name << " unreadable";
+    if (got.rows < 0) continue;
+    EXPECT_LE(got.values.size(), ref.values.size()) << name;
+    for (size_t k = 0; k < got.values.size() && k < ref.values.size(); ++k) {
+      if (got.values[k] != ref.values[k]) {
+        ADD_FAILURE() << path << ": " << name << " value " << k << " differs";
+        break;
+      }
+    }
+    if (std::string(name).rfind("/scoop/", 0) == 0) {
+      if (scoop_rows < 0) scoop_rows = got.rows;
+      EXPECT_EQ(got.rows, scoop_rows) << name;
+    }
+  }
+  return scoop_rows;
+}
+
+// The bed and the scene on it, and an uninterrupted run, each made once a process when needed.
+class RunOutputTest : public ::testing::Test {
+ protected:
+  static const std::string& Scene() {
+    static const std::string scene = [] {
+      const std::string bed = (TempDir() / "bed.h5").string();
+      const std::string path = WriteScene("tiny_dig_bed.yaml", bed, 0.01);
+      EXPECT_EQ(Wait(Spawn({"bed", path, "-o", bed}, (TempDir() / "bed.log").string())), 0);
+      return path;
+    }();
+    return scene;
+  }
+  static std::string Bed() { return (TempDir() / "bed.h5").string(); }
+  static const std::string& Reference() {
+    static const std::string reference = [] {
+      const std::string path = (TempDir() / "reference.h5").string();
+      EXPECT_EQ(Wait(Spawn({"run", Scene(), "-o", path}, (TempDir() / "ref.log").string())), 0);
+      EXPECT_GT(ReadRows(path, "/scoop/time").rows, 1000);
+      return path;
+    }();
+    return reference;
+  }
+};
+
+// SIGKILL at random moments (flushes every 10 ms): the file opens with plain readers, every
+// series is a prefix of the uninterrupted run's, and no row a reader saw before the kill is lost.
+TEST_F(RunOutputTest, SigkillLeavesAPlainFileWithTheFlushedRows) {
+  std::mt19937 random(std::random_device{}());
+  for (int trial = 0; trial < 5; ++trial) {
+    const double delay = std::uniform_real_distribution<double>(0.0, 3.0)(random);
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", killed " + std::to_string(delay) +
+                 " s after the output appeared");
+    const std::string out = (TempDir() / ("killed" + std::to_string(trial) + ".h5")).string();
+    const pid_t pid = Spawn({"run", Scene(), "-o", out}, "/dev/null");
+    WaitForFile(out, pid);
+    std::this_thread::sleep_for(std::chrono::duration<double>(delay));
+    const int64_t seen = ReadRows(out, "/scoop/time").rows;  // what a reader saw (-1: none)
+    ASSERT_EQ(::kill(pid, SIGKILL), 0);
+    ASSERT_EQ(Wait(pid), 128 + SIGKILL) << "ended before the kill";
+    ExpectPlainReadersOpen(out);
+    const int64_t rows = ExpectPrefixOf(out, Reference());
+    EXPECT_GE(rows, seen);
+  }
+}
+
+// A second run given the same output is refused at once with one line, exit 2; the first goes on
+// and writes the whole run.
+TEST_F(RunOutputTest, SecondWriterIsRefused) {
+  const std::string out = (TempDir() / "shared.h5").string();
+  const std::string first_log = (TempDir() / "first.log").string();
+  const pid_t first = Spawn({"run", Scene(), "-o", out}, first_log);
+  WaitForFile(out, first);
+  const std::string second_log = (TempDir() / "second.log").string();
+  EXPECT_EQ(Wait(Spawn({"run", Scene(), "-o", out}, second_log)), 2);
+  const std::vector<std::string> lines = Lines(ReadText(second_log));
+  ASSERT_EQ(lines.size(), 1u) << ReadText(second_log);
+  EXPECT_EQ(lines[0], "scoopsim: " + out +
+                          ": another process (a scoopsim run?) is writing this "
+                          "file; give this run another -o");
+  EXPECT_EQ(Wait(first), 0) << ReadText(first_log);
+  EXPECT_EQ(ReadRows(out, "/scoop/collected_mass").rows, 1) << "the pass did not end";
+}
+
+// `-o` naming the scene's own bed.file (by another spelling too) is refused, exit 2, one line,
+// the bed untouched.
+TEST_F(RunOutputTest, OutputOverTheRunsOwnBedIsRefused) {
+  Scene();  // makes the bed
+  const std::string before = ReadText(Bed());
+  const fs::path other_spelling = TempDir() / "." / "bed.h5";
+  for (const std::string& out : {Bed(), other_spelling.string()}) {
+    const std::string log = (TempDir() / "own_bed.log").string();
+    EXPECT_EQ(Wait(Spawn({"run", Scene(), "-o", out}, log)), 2);
+    const std::vector<std::string> lines = Lines(ReadText(log));
+    ASSERT_EQ(lines.size(), 1u) << ReadText(log);
+    EXPECT_NE(lines[0].find("-o names the run's own input (" + Scene() + ": bed.file"),
+              std::string::npos)
+        << lines[0];
+  }
+  EXPECT_TRUE(ReadText(Bed()) == before) << "the bed was changed";
+}
+
+// The output is checked before any work: a run that would pour its bed first fails at once.
+TEST_F(RunOutputTest, OutputIsCheckedBeforeThePour) {
+  const std::string pours = WriteScene("tiny_dig_pours.yaml", "", 10);
+  std::ofstream(TempDir() / "a_file") << "x";
+  const std::string out = (TempDir() / "a_file" / "run.h5").string();
+  const std::string log = (TempDir() / "unwritable.log").string();
+  EXPECT_EQ(Wait(Spawn({"run", pours, "-o", out}, log)), 2);
+  const std::vector<std::string> lines = Lines(ReadText(log));
+  ASSERT_EQ(lines.size(), 1u) << ReadText(log);
+  EXPECT_EQ(lines[0].find("scoopsim: " + out + ": "), 0u) << lines[0];
+  EXPECT_FALSE(fs::exists(TempDir() / "a_file.pour.h5"));
+}
+
+// A full disk, as the file size limit makes it (writes fail with EFBIG): exit 1, one line that
+// names the file, the reason, its size and the rows kept, no HDF5 error stack; the file opens
+// with plain readers and every series is a prefix of the uninterrupted run's.
+TEST_F(RunOutputTest, FullDiskGivesOneLineAndTrueRowCounts) {
+  for (const rlim_t limit : {rlim_t{600000}, rlim_t{1500000}}) {
+    SCOPED_TRACE("limit " + std::to_string(limit) + " B");
+    const std::string out = (TempDir() / ("full" + std::to_string(limit) + ".h5")).string();
+    const std::string log = (TempDir() / "full.log").string();
+    EXPECT_EQ(Wait(Spawn({"run", Scene(), "-o", out}, log, limit)), 1);
+    const std::string text = ReadText(log);
+    EXPECT_EQ(text.find("HDF5"), std::string::npos) << text;
+    int failures = 0;
+    std::string line;
+    for (const std::string& l : Lines(text)) {
+      if (l.find("failed") == std::string::npos) continue;
+      ++failures;
+      line = l;
+    }
+    EXPECT_EQ(failures, 1) << text;
+    EXPECT_NE(line.find(out + ": write failed (File too large) with "), std::string::npos) << line;
+    ExpectPlainReadersOpen(out);
+    const int64_t rows = ExpectPrefixOf(out, Reference());
+    EXPECT_GT(rows, 0);
+    EXPECT_NE(line.find("it keeps the rows of the last flush (" + std::to_string(rows) + " of "),
+              std::string::npos)
+        << line;
+  }
+}
+
+// A pour SIGKILLed and then SIGINTed keeps the bed poured so far beside the output (a loadable
+// bed file), and the same command goes on from it to a full bed, removing it.
+TEST_F(RunOutputTest, StoppedPourIsKeptAndGoesOn) {
+  const std::string scene = WriteScene("tiny_dig_pour_kept.yaml", "", 0.02);
+  const fs::path bed = TempDir() / "poured.h5";
+  const fs::path kept = TempDir() / "poured.pour.h5";
+  const std::string log = (TempDir() / "pour.log").string();
+  // Killed: the last bed kept (every 0.02 s of wall time) is there and reads.
+  pid_t pid = Spawn({"bed", scene, "-o", bed.string()}, log);
+  WaitForFile(kept, pid);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  ASSERT_EQ(::kill(pid, SIGKILL), 0);
+  ASSERT_EQ(Wait(pid), 128 + SIGKILL);
+  ExpectPlainReadersOpen(kept.string());
+  // Stopped: exit 130, the bed so far kept.
+  pid = Spawn({"bed", scene, "-o", bed.string()}, log);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ASSERT_EQ(::kill(pid, SIGINT), 0);
+  const int stopped = Wait(pid);
+  if (stopped == 130) {
+    EXPECT_NE(ReadText(log).find("the bed poured so far"), std::string::npos) << ReadText(log);
+    EXPECT_TRUE(fs::exists(kept));
+  } else {
+    EXPECT_EQ(stopped, 0) << ReadText(log);  // it had finished already
+  }
+  // Goes on: a full bed, the kept one removed.
+  if (fs::exists(kept)) {
+    EXPECT_EQ(Wait(Spawn({"bed", scene, "-o", bed.string()}, log)), 0) << ReadText(log);
+    EXPECT_NE(ReadText(log).find("the pour goes on from " + kept.string()), std::string::npos)
+        << ReadText(log);
+  }
+  EXPECT_FALSE(fs::exists(kept));
+  EXPECT_EQ(ReadRows(bed.string(), "/particles/radius").rows, 1450);
+}
+
+}  // namespace
