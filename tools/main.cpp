@@ -20,6 +20,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "arm/arm_model.h"
 #include "render/bench.h"
@@ -91,6 +92,7 @@ struct FramesArgs {
   bool video = false;
   std::string color_by;
   std::string camera;
+  std::vector<double> color_range;
 
   void AddTo(CLI::App* command, bool required, bool with_every) {
     CLI::Option* frames = command->add_option("--frames", dir,
@@ -107,6 +109,12 @@ struct FramesArgs {
     command->add_flag("--video", video, "Also assemble DIR.mp4 with ffmpeg (when installed)");
     command->add_option("--color-by", color_by, "speed|depth|material|force (default: the scene's)")
         ->check(CLI::IsMember({"speed", "depth", "material", "force"}));
+    command
+        ->add_option("--color-range", color_range,
+                     "LO,HI: the colour range of every frame (default: run: from the scene, "
+                     "render: the whole run's)")
+        ->expected(2)
+        ->delimiter(',');
     std::string presets;
     for (const std::string& p : render::CameraPresetNames())
       presets += (presets.empty() ? "" : "|") + p;
@@ -122,6 +130,16 @@ struct FramesArgs {
     render::FrameOptions options = render::FrameOptionsFromSpec(s);
     options.dir = dir;
     options.threads = threads;
+    if (!color_range.empty()) {
+      if (!(color_range[0] < color_range[1])) {
+        throw sim::InputError("--color-range: expected LO,HI with LO < HI, got " +
+                              std::to_string(color_range[0]) + "," +
+                              std::to_string(color_range[1]));
+      }
+      options.settings.range_min = color_range[0];
+      options.settings.range_max = color_range[1];
+      options.range_given = true;
+    }
     return options;
   }
 
@@ -289,8 +307,14 @@ int Main(int argc, char** argv) {
       if (!run_frames.dir.empty()) {
         // Rendering happens inside the run loop's frame callback, between steps: the DEM's
         // OpenMP threads are idle then, and llvmpipe gets as many threads as the DEM had.
-        frames = std::make_unique<render::FrameSequence>(
-            run_frames.Options(scene.render, options.threads > 0 ? options.threads : AllCores()));
+        render::FrameOptions frame_options =
+            run_frames.Options(scene.render, options.threads > 0 ? options.threads : AllCores());
+        if (!frame_options.range_given) {
+          render::SceneColorRange(scene, frame_options.settings.color_by,
+                                  &frame_options.settings.range_min,
+                                  &frame_options.settings.range_max);
+        }
+        frames = std::make_unique<render::FrameSequence>(frame_options);
         options.on_frame = [&frames](const sim::WorldView& view) { frames->Add(view); };
         options.frame_every = run_frames.every > 0 ? run_frames.every : scene.render.every;
       }
