@@ -335,7 +335,8 @@ struct ArmDriver::Impl {
         retract.t = jp.time;
         retract.q = jp.q;
         mode = Mode::kRetract;
-        end_tau = std::min(end_tau, t_b + length + spec.stop_hold);
+        // The retract runs to its end even past the path's planned end (which cut it short).
+        end_tau = t_b + length + spec.stop_hold;
       } catch (const std::exception& e) {
         Status("scoopsim: arm: retract not planned (%s): holding\n", e.what());
         end_tau = std::min(end_tau, t_b + spec.stop_hold);
