@@ -13,8 +13,10 @@
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <memory>
@@ -92,7 +94,7 @@ struct FramesArgs {
   bool video = false;
   std::string color_by;
   std::string camera;
-  std::vector<double> color_range;
+  std::string color_range;
 
   void AddTo(CLI::App* command, bool required, bool with_every) {
     CLI::Option* frames = command->add_option("--frames", dir,
@@ -109,12 +111,9 @@ struct FramesArgs {
     command->add_flag("--video", video, "Also assemble DIR.mp4 with ffmpeg (when installed)");
     command->add_option("--color-by", color_by, "speed|depth|material|force (default: the scene's)")
         ->check(CLI::IsMember({"speed", "depth", "material", "force"}));
-    command
-        ->add_option("--color-range", color_range,
-                     "LO,HI: the colour range of every frame (default: run: from the scene, "
-                     "render: the whole run's)")
-        ->expected(2)
-        ->delimiter(',');
+    command->add_option("--color-range", color_range,
+                        "LO,HI: the colour range of every frame (default: run: from the scene, "
+                        "render: the whole run's)");
     std::string presets;
     for (const std::string& p : render::CameraPresetNames())
       presets += (presets.empty() ? "" : "|") + p;
@@ -131,13 +130,20 @@ struct FramesArgs {
     options.dir = dir;
     options.threads = threads;
     if (!color_range.empty()) {
-      if (!(color_range[0] < color_range[1])) {
-        throw sim::InputError("--color-range: expected LO,HI with LO < HI, got " +
-                              std::to_string(color_range[0]) + "," +
-                              std::to_string(color_range[1]));
+      // Two finite numbers, LO < HI, and nothing else.
+      const char* text = color_range.c_str();
+      char* end = nullptr;
+      const double lo = std::strtod(text, &end);
+      const bool comma = end != text && *end == ',';
+      const char* second = comma ? end + 1 : end;
+      const double hi = comma ? std::strtod(second, &end) : 0.0;
+      if (!comma || end == second || *end != '\0' || !std::isfinite(lo) || !std::isfinite(hi) ||
+          !(lo < hi)) {
+        throw sim::InputError("--color-range: expected LO,HI, two numbers with LO < HI, got " +
+                              color_range);
       }
-      options.settings.range_min = color_range[0];
-      options.settings.range_max = color_range[1];
+      options.settings.range_min = lo;
+      options.settings.range_max = hi;
       options.range_given = true;
     }
     return options;

@@ -420,7 +420,8 @@ TEST(FramesTest, SceneColourRangeFollowsTheScene) {
   EXPECT_NEAR(hi, m * 1.3 * 0.15 / (2 * r), 1e-12 * hi);
 }
 
-// --color-range LO,HI with LO >= HI is bad input: exit 2 and one line naming the option.
+// --color-range other than LO,HI with LO < HI (reversed, one number, not numbers, a third value)
+// is bad input: exit 2 and one line naming the option.
 TEST(FramesTest, ColorRangeOptionIsChecked) {
   const std::string h5 = (TempDir() / "range_cli.h5").string();
   {
@@ -430,13 +431,16 @@ TEST(FramesTest, ColorRangeOptionIsChecked) {
     out.Close();
   }
   const std::string err = (TempDir() / "range_cli.txt").string();
-  EXPECT_EQ(Scoopsim("render " + h5 + " --frames " + (TempDir() / "range_cli").string() +
-                         " --color-range 2,1 --quiet",
-                     err),
-            2);
-  const std::string text = FileBytes(err);
-  EXPECT_NE(text.find("--color-range: expected LO,HI with LO < HI"), std::string::npos) << text;
-  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+  for (const char* range : {"2,1", "1", "a,b", "0,1,2", "0,"}) {
+    EXPECT_EQ(Scoopsim("render " + h5 + " --frames " + (TempDir() / "range_cli").string() +
+                           " --color-range " + range + " --quiet",
+                       err),
+              2)
+        << range;
+    const std::string text = FileBytes(err);
+    EXPECT_NE(text.find("--color-range: expected LO,HI"), std::string::npos) << text;
+    EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+  }
 }
 
 }  // namespace
