@@ -24,15 +24,7 @@ CSV="$RESDIR/${CSV:-interleaved_pairs.csv}"
 mkdir -p "$RESDIR"
 [ -s "$CSV" ] || echo "date,label,binary,run,key,value,state_hash" >"$CSV"
 
-QUIET_WAIT=${QUIET_WAIT:-0}
-wait_quiet() {
-  local waited=0
-  while [ "$waited" -lt "$QUIET_WAIT" ] &&
-    pgrep -f 'cc1plus|ctest|_tests|mpirun|scoopsim (run|bed|bench|sweep|study)' >/dev/null; do
-    sleep 5
-    waited=$((waited + 5))
-  done
-}
+. "$ROOT/bench/wait_quiet.sh"
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 for r in $(seq "$NRUNS"); do

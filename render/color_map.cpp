@@ -135,4 +135,46 @@ void AutoRange::Update(ColorField field, const std::vector<float>& values) {
   max_ = std::max({max_, static_cast<double>(scratch[k]), floor});
 }
 
+void SceneColorRange(const sim::Scene& scene, ColorField field, double* min, double* max) {
+  const double h = scene.box_max.z - scene.box_min.z;
+  const double g = dem::Norm(scene.gravity);
+  *min = 0;
+  switch (field) {
+    case ColorField::kSpeed: {
+      if (!scene.dig.enabled) {
+        *max = std::sqrt(g * h);
+        break;
+      }
+      const sim::TrajectorySpec& path = scene.dig.trajectory;
+      double top = 0;
+      for (const sim::Move& move : path.moves) {
+        if (move.kind == sim::Move::Kind::kTranslate) top = std::max(top, move.speed);
+        if (move.kind != sim::Move::Kind::kRotate) continue;
+        const dem::Vec3 point = move.about_pivot ? path.pivot_offset : move.point;
+        double lever = 0;
+        for (const dem::Vec3& v : scene.dig.scoop.geometry.vertices)
+          lever = std::max(lever, dem::Norm(v - point));
+        top = std::max(top, move.speed * lever);
+      }
+      *max = top;
+      break;
+    }
+    case ColorField::kDepth:
+      *max = h;
+      break;
+    case ColorField::kMaterial:
+      *max = std::max(0, scene.materials.size() - 1);
+      break;
+    case ColorField::kForce: {
+      const int m = scene.materials.Find(scene.bed.material);
+      const double r = scene.bed.radius_max;
+      const double mass =
+          m >= 0 ? scene.materials[m].density * 4.0 / 3.0 * 3.14159265358979 * r * r * r : 0.0;
+      *max = r > 0 ? mass * g * h / (2 * r) : 0.0;
+      break;
+    }
+  }
+  if (!(*max > *min)) *max = *min + 1;  // a degenerate scene: any non-empty range
+}
+
 }  // namespace render

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/scene.h"
 #include "sim/world_view.h"
 
 namespace render {
@@ -34,9 +35,12 @@ Rgb MaterialColor(int material);
 //   force     contact force |f - m g| [N] (f of the last step holds gravity; needs view.gravity)
 void ComputeField(const sim::WorldView& view, ColorField field, std::vector<float>* values);
 
-// A colour range that only grows over a sequence of frames, so colours keep their meaning from
-// frame to frame: [0, max] with max the largest 99th percentile of the field seen so far (at
-// least `floor`). Material ranges over the material indices seen.
+// A frame sequence has one colour range, fixed before its first frame, so that a colour means the
+// same value in every frame (render/frames.h).
+
+// The range of a saved run's sequence, from every frame's field before any is drawn: Update()
+// with each snapshot's field, then [0, max] with max the largest 99th percentile seen (at least
+// `floor`). Material ranges over the material indices seen.
 class AutoRange {
  public:
   void Update(ColorField field, const std::vector<float>& values);
@@ -46,5 +50,16 @@ class AutoRange {
  private:
   double min_ = 0, max_ = 0;
 };
+
+// The range of a running world's frames, fixed before the first (a run cannot see its later
+// frames), from the scene:
+//   speed     [0, the scoop's top speed on its path]: translations' speeds, rotations' rates
+//             times the scoop mesh's farthest vertex from the rotation point (the speed of
+//             grains the scoop carries); without a dig [0, sqrt(|g| h)], h the box's height
+//   depth     [0, h]
+//   material  [0, number of materials - 1]
+//   force     [0, m |g| h / (2 r)]: the weight of a column of the bed's largest spheres (radius
+//             r, mass m) filling the box's height (the force on the bottom layer at rest)
+void SceneColorRange(const sim::Scene& scene, ColorField field, double* min, double* max);
 
 }  // namespace render

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <stdexcept>
 
 namespace render {
 
@@ -58,12 +59,6 @@ void FrameSequence::Add(const sim::WorldView& view) {
   if (!options_.camera_preset.empty()) {
     ApplyCameraPreset(options_.camera_preset, view.box_min, view.box_max, &settings.camera);
   }
-  if (options_.auto_range) {
-    ComputeField(view, settings.color_by, &field_);
-    range_.Update(settings.color_by, field_);
-    settings.range_min = range_.min();
-    settings.range_max = range_.max();
-  }
   const Image& image = renderer_->Render(view, settings);
   const auto t1 = Clock::now();
   WritePng(FramePath(count_), image, options_.png_level);
@@ -71,6 +66,12 @@ void FrameSequence::Add(const sim::WorldView& view) {
   draw_seconds_ += std::chrono::duration<double>(t1 - t0).count();
   png_seconds_ += std::chrono::duration<double>(t2 - t1).count();
   ++count_;
+}
+
+void FrameSequence::SetRange(double min, double max) {
+  if (count_ > 0) throw std::logic_error("FrameSequence::SetRange: frames already written");
+  options_.settings.range_min = min;
+  options_.settings.range_max = max;
 }
 
 bool AssembleVideo(const std::string& dir, const std::string& mp4, double fps,

@@ -13,10 +13,14 @@
 namespace render {
 
 struct FrameOptions {
-  std::string dir;            // output folder (created)
-  RenderSettings settings;    // camera size, colouring, ...
+  std::string dir;  // output folder (created)
+  // Camera size, colouring, ... and the colour range (range_min, range_max) of every frame:
+  // fixed for the whole sequence, so a colour means the same value in every frame.
+  RenderSettings settings;
   std::string camera_preset;  // when not empty, frames the view's box with this preset
-  bool auto_range = true;     // colour range from AutoRange (grows over the sequence)
+  bool range_given = false;   // settings' range was chosen by the user (--color-range); else
+                              // the caller sets it: SceneColorRange (running), the whole run's
+                              // AutoRange (saved, RenderSavedRun)
   int png_level = 1;          // zlib level
   int threads = 0;            // LP_NUM_THREADS when unset (0 = llvmpipe's default)
 };
@@ -32,8 +36,11 @@ class FrameSequence {
   explicit FrameSequence(FrameOptions options);
   ~FrameSequence();
 
-  // Renders `view` and writes the next numbered frame. Call between DEM steps only.
+  // Renders `view` and writes the next numbered frame, in the sequence's colour range. Call
+  // between DEM steps only.
   void Add(const sim::WorldView& view);
+  // Sets the colour range of the sequence; std::logic_error once a frame was written.
+  void SetRange(double min, double max);
 
   int count() const { return count_; }
   const std::string& dir() const { return options_.dir; }
@@ -46,8 +53,6 @@ class FrameSequence {
  private:
   FrameOptions options_;
   std::unique_ptr<Renderer> renderer_;
-  AutoRange range_;
-  std::vector<float> field_;
   int count_ = 0;
   double draw_seconds_ = 0, png_seconds_ = 0;
 };

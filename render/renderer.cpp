@@ -359,18 +359,26 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
     m.DrawSurfaces(m.lines, GL_LINES, 0.25f, 0.26f, 0.30f, false);
   }
 
-  // Meshes (the scoop): body-frame triangles moved to the world on the CPU, flat normals.
-  m.triangles.clear();
-  for (const sim::MeshView& mesh_view : view.meshes) {
-    if (mesh_view.mesh == nullptr) continue;
-    const dem::TriangleMesh& mesh = *mesh_view.mesh;
-    for (const auto& t : mesh.triangles) {
-      AddTriangle(&m.triangles, dem::Apply(mesh_view.pose, mesh.vertices[t[0]]),
-                  dem::Apply(mesh_view.pose, mesh.vertices[t[1]]),
-                  dem::Apply(mesh_view.pose, mesh.vertices[t[2]]));
+  // Meshes: body-frame triangles moved to the world on the CPU, flat normals; the scoop and
+  // obstacles in one colour, the arm's links in another.
+  for (const bool arm_links : {false, true}) {
+    m.triangles.clear();
+    for (const sim::MeshView& mesh_view : view.meshes) {
+      if (mesh_view.mesh == nullptr || (mesh_view.role == sim::MeshRole::kArmLink) != arm_links)
+        continue;
+      const dem::TriangleMesh& mesh = *mesh_view.mesh;
+      for (const auto& t : mesh.triangles) {
+        AddTriangle(&m.triangles, dem::Apply(mesh_view.pose, mesh.vertices[t[0]]),
+                    dem::Apply(mesh_view.pose, mesh.vertices[t[1]]),
+                    dem::Apply(mesh_view.pose, mesh.vertices[t[2]]));
+      }
+    }
+    if (arm_links) {
+      m.DrawSurfaces(m.triangles, GL_TRIANGLES, 0.90f, 0.55f, 0.20f, settings.shading);
+    } else {
+      m.DrawSurfaces(m.triangles, GL_TRIANGLES, 0.74f, 0.76f, 0.80f, settings.shading);
     }
   }
-  m.DrawSurfaces(m.triangles, GL_TRIANGLES, 0.74f, 0.76f, 0.80f, settings.shading);
 
   // Particles: culled (see Render's header comment), coloured on the CPU (one field value and
   // one colour-map lookup each), drawn as points.
@@ -527,6 +535,9 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
     const Rgba8 ink{25, 27, 32, 255};
     const int s = camera.height >= 480 ? 2 : 1;  // font scale
     DrawText(&m.image, 12 * s, 10 * s, Caption(view), s, ink);
+    if (!view.faults.empty())
+      DrawText(&m.image, 12 * s, 10 * s + kGlyphHeight * s, "FAULT " + view.faults, s, kMarginOver);
+    DrawTorqueBars(&m.image, view.joints, s, ink);
     if (n > 0) {
       // Colour bar at the right edge: the title above, the range's ends beside it.
       const int bar_w = 12 * s, bar_h = camera.height * 2 / 5;
@@ -563,12 +574,50 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
 }
 
 std::string Caption(const sim::WorldView& view) {
-  std::string text = "t = " + Format("%.5f", view.time) + " s";
+  std::string text = "t = " + Format("%.5f", view.time - view.clock_start) + " s";
   if (view.pass > 0) {
     text += "   pass " + std::to_string(view.pass) + "   rho = " + Format("%.4f", view.rho) + " m";
   }
   if (view.pass > 0 || view.force > 0) text += "   |F| = " + Format("%.3g", view.force) + " N";
   return text;
+}
+
+}  // namespace render
+
+namespace render {
+
+double TorqueMargin(const sim::JointView& joint) {
+  return joint.limit > 0 ? 1.0 - std::abs(joint.torque) / joint.limit : 0.0;
+}
+
+double TorqueBarFraction(const sim::JointView& joint) {
+  return 1.0 - std::max(TorqueMargin(joint), 0.0);
+}
+
+Rgba8 MarginColor(double margin) {
+  if (margin > kMarginLow) return kMarginOk;
+  if (margin > 0) return kMarginWarn;
+  return kMarginOver;
+}
+
+void DrawTorqueBars(Image* image, const std::vector<sim::JointView>& joints, int s, Rgba8 ink) {
+  if (joints.empty()) return;
+  // A row per joint, from the bottom-left corner up: name, then the track and its filled part.
+  int label_w = 0;
+  for (const sim::JointView& j : joints) label_w = std::max(label_w, TextWidth(j.name, s));
+  const int track_w = 100 * s, bar_h = 7 * s, row_h = kGlyphHeight * s + 2 * s;
+  const int x = 12 * s, bar_x = x + label_w + 6 * s;
+  int y = image->height() - 10 * s - static_cast<int>(joints.size()) * row_h;
+  DrawText(image, x, y - row_h, "|torque| / effort limit", s, ink);
+  for (const sim::JointView& j : joints) {
+    DrawText(image, x, y, j.name, s, ink);
+    const int bar_y = y + (kGlyphHeight * s - bar_h) / 2 - s;
+    image->FillRect(bar_x - s, bar_y - s, track_w + 2 * s, bar_h + 2 * s, ink);
+    image->FillRect(bar_x, bar_y, track_w, bar_h, {255, 255, 255, 255});
+    const int filled = static_cast<int>(std::lround(TorqueBarFraction(j) * track_w));
+    image->FillRect(bar_x, bar_y, filled, bar_h, MarginColor(TorqueMargin(j)));
+    y += row_h;
+  }
 }
 
 }  // namespace render

@@ -2,14 +2,16 @@
 // core; no display, no GPU). Public header of the render module.
 //
 // What a frame shows: particles as ray-cast sphere impostors drawn from point sprites, coloured by
-// a field through a colour map and lit; the meshes of the view (the scoop) lit with flat normals;
-// the ground under the bed box and the box's edges; a caption (t, pass, rho, |F|) and a colour
-// bar. Threads: llvmpipe rasterises on LP_NUM_THREADS threads. Never call Render() while the
+// a field through a colour map and lit; the meshes of the view lit with flat normals (the scoop
+// and obstacles light grey, the arm's links orange); the ground under the bed box and the box's
+// edges; a caption (t, pass, rho, |F|), a colour bar, and with an arm its torque bars and fault
+// flags. Threads: llvmpipe rasterises on LP_NUM_THREADS threads. Never call Render() while the
 // DEM's OpenMP threads run (the run loop calls its frame callback between steps).
 #pragma once
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "render/camera.h"
 #include "render/color_map.h"
@@ -74,8 +76,25 @@ class Renderer {
   std::unique_ptr<Impl> impl_;
 };
 
-// Caption text for a view: "t = 0.01234 s", plus pass and rho when the view has a dig (pass > 0)
-// and |F| when it has a dig or a force.
+// Caption text for a view: "t = 0.01234 s" on the view's clock (time - clock_start: from the
+// dig's start, not the pour's), plus pass and rho when the view has a dig (pass > 0) and |F| when
+// it has a dig or a force.
 std::string Caption(const sim::WorldView& view);
+
+// The arm's torque bars (bottom left, one per joint of view.joints, base to tip). The margin of a
+// joint is m = 1 - |torque| / limit (the demanded torque's distance from the effort limit, as a
+// fraction of it). The bar's filled length is min(|torque| / limit, 1) of its track, i.e.
+// 1 - max(m, 0); its colour is kMarginOk (green) for m > kMarginLow, kMarginWarn (amber) for
+// 0 < m <= kMarginLow, kMarginOver (red) for m <= 0 (at or over the limit: the joint saturates).
+// Latched fault flags (view.faults) are written in red under the caption.
+constexpr double kMarginLow = 0.25;
+constexpr Rgba8 kMarginOk{46, 160, 67, 255};
+constexpr Rgba8 kMarginWarn{235, 160, 20, 255};
+constexpr Rgba8 kMarginOver{214, 39, 40, 255};
+double TorqueMargin(const sim::JointView& joint);
+double TorqueBarFraction(const sim::JointView& joint);
+Rgba8 MarginColor(double margin);
+// Draws the bars of `joints` into `image` at font scale `s`, labels and track outline in `ink`.
+void DrawTorqueBars(Image* image, const std::vector<sim::JointView>& joints, int s, Rgba8 ink);
 
 }  // namespace render

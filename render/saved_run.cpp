@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "sim/arm_geometry.h"
 #include "sim/mesh_io.h"
 #include "sim/saved_run.h"
 
@@ -34,7 +35,25 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
     }
   }
 
+  const sim::ArmSeries arm = run.Arm();
+  const double clock_start = run.RootNumber("start_time", 0.0);
+
   dem::Particles particles;
+  // One colour range for the whole sequence: from every snapshot's field, unless given.
+  if (!frames->options().range_given) {
+    const ColorField field = frames->options().settings.color_by;
+    AutoRange range;
+    std::vector<float> values;
+    for (const sim::SnapshotInfo& snapshot : snapshots) {
+      run.ReadSnapshot(snapshot, &particles);
+      sim::WorldView view;
+      view.particles = &particles;
+      ComputeField(view, field, &values);
+      range.Update(field, values);
+    }
+    frames->SetRange(range.min(), range.max());
+  }
+
   int written = 0;
   const bool tty = isatty(fileno(stderr)) != 0;
   for (const sim::SnapshotInfo& snapshot : snapshots) {
@@ -43,6 +62,7 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
 
     sim::WorldView view;
     view.time = snapshot.time;
+    view.clock_start = clock_start;
     view.particles = &particles;
     if (scene.has_gravity) view.gravity = scene.gravity;
     if (scene.has_box) {
@@ -61,13 +81,31 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
                         std::max(view.box_max.z, p.z + r)};
       }
     }
-    // The scoop at the last sample at or before the snapshot.
+    // The meshes stored with the snapshot (world coordinates); a file written before they were
+    // stored: the scoop at the last /scoop/ sample at or before the snapshot.
+    const std::vector<sim::SnapshotMesh> stored = run.ReadSnapshotMeshes(snapshot);
+    for (const sim::SnapshotMesh& m : stored) {
+      const sim::MeshRole role = m.name == "arm"         ? sim::MeshRole::kArmLink
+                                 : m.name == "obstacles" ? sim::MeshRole::kObstacle
+                                                         : sim::MeshRole::kScoop;
+      view.meshes.push_back({&m.mesh, dem::Pose{}, role});
+    }
     const int k = scoop.SampleAt(snapshot.time);
     if (k >= 0) {
       if (!scoop.pass.empty()) view.pass = scoop.pass[k];
       if (!scoop.rho.empty()) view.rho = scoop.rho[k];
       if (!scoop.force_world.empty()) view.force = dem::Norm(scoop.force_world[k]);
-      if (!scoop_mesh.triangles.empty()) view.meshes.push_back({&scoop_mesh, scoop.pose[k]});
+      if (stored.empty() && !scoop_mesh.triangles.empty())
+        view.meshes.push_back({&scoop_mesh, scoop.pose[k]});
+    }
+    // The arm's torque bars and fault flags at the last /arm/ sample at or before it.
+    const int a = arm.empty() ? -1 : sim::SampleAt(arm.time, snapshot.time);
+    if (a >= 0) {
+      const size_t n = arm.joints.size();
+      for (size_t j = 0; j < n; ++j)
+        view.joints.push_back(
+            {arm.joints[j], arm.torque_demanded[a * n + j], arm.effort_limit[a * n + j]});
+      view.faults = sim::FaultNames(arm.fault_latched[a]);
     }
     frames->Add(view);
     ++written;

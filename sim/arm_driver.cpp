@@ -12,6 +12,7 @@
 #include "arm/fault_monitor.h"
 #include "arm/kinematics.h"
 #include "dem/triangle.h"
+#include "sim/arm_geometry.h"
 #include "sim/h5_output.h"
 #include "sim/progress.h"
 
@@ -65,6 +66,7 @@ struct ArmDriver::Impl {
   double dt = 0;  // DEM step [s]
   int k = 1;      // DEM steps per Bullet step
   arm::ArmModel model;
+  ArmGeometry geometry;  // the links, for frames and snapshots
   int n = 0;
   int scoop_body = 0;
   int sensor = -1;  // sensor joint index
@@ -115,6 +117,7 @@ struct ArmDriver::Impl {
         dt(scene.time_step),
         k(scene.arm.substeps),
         model(*scene.arm.model),
+        geometry(scene.arm.model),
         path(scene.dig.trajectory, scene.dig.heading, scene.dig.bite_depth, scene.dig.start_buried),
         dig(scene.dig),
         start_buried(scene.dig.start_buried) {
@@ -332,7 +335,8 @@ struct ArmDriver::Impl {
         retract.t = jp.time;
         retract.q = jp.q;
         mode = Mode::kRetract;
-        end_tau = std::min(end_tau, t_b + length + spec.stop_hold);
+        // The retract runs to its end even past the path's planned end (which cut it short).
+        end_tau = t_b + length + spec.stop_hold;
       } catch (const std::exception& e) {
         Status("scoopsim: arm: retract not planned (%s): holding\n", e.what());
         end_tau = std::min(end_tau, t_b + spec.stop_hold);
@@ -546,6 +550,22 @@ void ArmDriver::Record(H5Output* out, double time) {
   const double latched = static_cast<double>(a.report.latched);
   out->AppendRow("/arm/fault_latched", &latched, 1);
   out->AppendRow("/arm/tracking_error", &a.tracking, 1);
+}
+
+void ArmDriver::AddToView(WorldView* view) const {
+  const Impl& a = *impl_;
+  if (!a.bullet) return;
+  const ArmBase base{{a.report.base[0], a.report.base[1], a.report.base[2]}, a.report.base[3]};
+  a.geometry.AddToView(a.bullet->q().data(), base, view);
+  for (int i = 0; i < a.n; ++i)
+    view->joints.push_back({a.report.joints[i], a.demanded[i], a.report.effort_limit[i]});
+  view->faults = FaultNames(a.report.latched);
+}
+
+std::vector<double> ArmDriver::JointPositions() const {
+  if (!impl_->bullet) return {};
+  const Eigen::VectorXd& q = impl_->bullet->q();
+  return std::vector<double>(q.data(), q.data() + q.size());
 }
 
 void ArmDriver::Finish(H5Output* out) {

@@ -78,8 +78,13 @@ class ArmDriver : public ScoopDriver {
   double PlannedDuration(int pass, const BedContext& bed) const override;
   void Record(H5Output* out, double time) override;
   void Finish(H5Output* out) override;
+  // The links but the scoop (sim/arm_geometry.h) at Bullet's joint positions, the demanded
+  // torques against the effort limits, the latched fault flags.
+  void AddToView(WorldView* view) const override;
 
   const ArmReport& report() const;
+  // Bullet's joint positions now [rad] (dof; empty before the first pass).
+  std::vector<double> JointPositions() const;
 
  private:
   struct Impl;

@@ -121,12 +121,6 @@ Handle IntermediateGroupsLcpl() {
   return lcpl;
 }
 
-std::string FormatDouble(double value) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%.17g", value);
-  return text;
-}
-
 std::string XmlEscape(const std::string& text) {
   std::string out;
   for (char c : text) {
@@ -154,6 +148,12 @@ std::string XmlEscape(const std::string& text) {
 }
 
 }  // namespace
+
+std::string FormatDouble(double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
+}
 
 void WriteStringAttribute(hid_t object, const std::string& name, const std::string& value) {
   Handle type = VariableStringType();
@@ -245,7 +245,7 @@ SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
       p.material.size() != n) {
     throw std::invalid_argument("WriteParticleSnapshot: particle arrays differ in length");
   }
-  SnapshotEntry entry{SnapshotGroupName(index), time, static_cast<int64_t>(n)};
+  SnapshotEntry entry{SnapshotGroupName(index), time, static_cast<int64_t>(n), {}};
   Handle lcpl = IntermediateGroupsLcpl();
   Handle group(CheckId(H5Gcreate2(file, entry.group.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
                        "H5Gcreate2 " + entry.group),
@@ -340,7 +340,7 @@ void WriteXdmf(const std::string& h5_path, const std::vector<SnapshotEntry>& sna
     x << "      </Grid>\n";
   }
   x << "    </Grid>\n"
-    << "  </Domain>\n"
+    << MeshGridsXdmf(file, snapshots) << "  </Domain>\n"
     << "</Xdmf>\n";
 
   const std::string path = XdmfPath(h5_path);
@@ -722,12 +722,16 @@ void H5Output::AppendRow(const std::string& dataset, const double* values, int w
   if (s->pending.size() / static_cast<size_t>(width) >= to_boundary) m.flush_due = true;
 }
 
-void H5Output::WriteSnapshot(double time, const dem::Particles& particles) {
+void H5Output::WriteSnapshot(double time, const dem::Particles& particles,
+                             const std::vector<MeshView>& meshes) {
   Impl& m = *impl_;
   m.RequireOpen("WriteSnapshot");
   const int64_t index = static_cast<int64_t>(m.snapshots.size());
   m.Write([&] {
-    m.snapshots.push_back(h5::WriteParticleSnapshot(m.file.get(), index, time, particles));
+    h5::SnapshotEntry entry = h5::WriteParticleSnapshot(m.file.get(), index, time, particles);
+    if (!meshes.empty())
+      entry.meshes = h5::WriteSnapshotMeshes(m.file.get(), entry.group, meshes);
+    m.snapshots.push_back(std::move(entry));
   });
   Flush();
   m.Write([&] { h5::WriteXdmf(m.path, m.snapshots); });

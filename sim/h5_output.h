@@ -9,7 +9,13 @@
 //   /snapshots/NNNNNN       attribute time [s]; id int64 (N), position, velocity,
 //                           angular_velocity (N x 3), radius (N), material int32 (N), speed (N),
 //                           connectivity int64 (N) = 0..N-1; all in persistent-id order, SI units
+//   /snapshots/NNNNNN/meshes/<name>   the meshes at that instant, one group per role: scoop, arm
+//                           (its links but the scoop), obstacles; points (V x 3) in world
+//                           coordinates [m], triangles int64 (T x 3), part int32 (T), pose
+//                           (P x 7: each part's body -> world, x y z qw qx qy qz)
+//                           (sim/internal_h5.h, WriteSnapshotMeshes)
 //   <name>.xdmf             next to <name>.h5: XDMF3 temporal collection of the snapshots
+//                           ("particles", Polyvertex), and one of Triangle grids per mesh name
 //
 // Crash safety (ARCHITECTURE.md "Crash-safe output"): the file is written in HDF5's
 // single-writer/multiple-reader (SWMR) mode, whose ordered metadata writes keep every prefix of
@@ -35,6 +41,7 @@
 #include <vector>
 
 #include "dem/system.h"
+#include "sim/world_view.h"
 
 namespace sim {
 
@@ -70,9 +77,11 @@ class H5Output {
   // is fixed by its first row (std::invalid_argument on a mismatch).
   void AppendRow(const std::string& dataset, const double* values, int width);
 
-  // Writes /snapshots/NNNNNN (sequential from 000000), flushes the file, then rewrites the XDMF
-  // sidecar, so the sidecar only names data that is on disk.
-  void WriteSnapshot(double time, const dem::Particles& particles);
+  // Writes /snapshots/NNNNNN (sequential from 000000) with `meshes` (the scoop, the arm's links,
+  // the obstacles at that instant), flushes the file, then rewrites the XDMF sidecar, so the
+  // sidecar only names data that is on disk.
+  void WriteSnapshot(double time, const dem::Particles& particles,
+                     const std::vector<MeshView>& meshes = {});
 
   void SetStateHash(uint64_t hash);  // root state_hash (hex string) and state_hash_u64
   void SetAttribute(const std::string& name, double value);

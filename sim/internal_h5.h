@@ -13,6 +13,7 @@
 
 #include "dem/system.h"
 #include "dem/vec3.h"
+#include "sim/world_view.h"
 
 namespace sim::h5 {
 
@@ -102,11 +103,19 @@ void WriteArray(hid_t location, const std::string& name, hid_t file_type, hid_t 
 // Storage indices of the particles sorted by persistent id (output is always in id order).
 std::vector<size_t> IdOrder(const dem::Particles& particles);
 
+// The meshes of one role in a snapshot (/snapshots/NNNNNN/meshes/<name>), for the XDMF.
+struct MeshEntry {
+  std::string name;    // MeshRoleName: "scoop", "arm", "obstacles"
+  int64_t points = 0;  // vertices
+  int64_t triangles = 0;
+};
+
 // One particle snapshot as referenced by the XDMF sidecar.
 struct SnapshotEntry {
   std::string group;  // "/snapshots/000012"
   double time = 0;    // [s]
   int64_t count = 0;  // particles
+  std::vector<MeshEntry> meshes;
 };
 std::string SnapshotGroupName(int64_t index);
 
@@ -116,6 +125,22 @@ std::string SnapshotGroupName(int64_t index);
 // bed file hard-links its /particles datasets to the snapshot's.
 SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
                                     const dem::Particles& particles);
+
+// Writes the meshes of a snapshot under <group>/meshes/<name>, one group per role (in the order
+// the roles first appear in `meshes`), each the role's parts together in world coordinates:
+//   points (V x 3) [m], triangles int64 (T x 3) (indices into points, counter-clockwise seen from
+//   outside as the part's mesh), part int32 (T) (the part, 0.., in `meshes` order), pose
+//   (P x 7) (each part's body -> world pose: x y z [m], qw qx qy qz), so that a part's points
+//   are its body-frame vertices moved by its pose.
+// Meshes given as null are skipped. Written in the snapshot's own group (sim/snapshot_meshes.cpp).
+std::vector<MeshEntry> WriteSnapshotMeshes(hid_t file, const std::string& group,
+                                           const std::vector<MeshView>& meshes);
+// The XDMF3 grids of the snapshots' meshes: per mesh name a temporal collection of Triangle grids
+// (geometry `points`, cell attribute `part`), written into the sidecar's domain.
+std::string MeshGridsXdmf(const std::string& h5_file_name,
+                          const std::vector<SnapshotEntry>& snapshots);
+// %.17g: the XDMF's times.
+std::string FormatDouble(double value);
 
 // "<path without extension>.xdmf" next to the HDF5 file.
 std::string XdmfPath(const std::string& h5_path);

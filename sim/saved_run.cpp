@@ -11,10 +11,12 @@
 
 namespace sim {
 
-int ScoopSeries::SampleAt(double t) const {
+int SampleAt(const std::vector<double>& time, double t) {
   const auto it = std::upper_bound(time.begin(), time.end(), t + 1e-9);
   return static_cast<int>(it - time.begin()) - 1;
 }
+
+int ScoopSeries::SampleAt(double t) const { return sim::SampleAt(time, t); }
 
 struct SavedRun::Impl {
   h5::Handle file;
@@ -94,6 +96,61 @@ ScoopSeries SavedRun::Scoop() const {
     s.pose.push_back({{q[0], q[1], q[2]}, {q[3], q[4], q[5], q[6]}});
   }
   return s;
+}
+
+ArmSeries SavedRun::Arm() const {
+  const h5::Reader& in = impl_->in;
+  ArmSeries a;
+  if (!in.Exists("/arm/time") || !in.HasAttribute("/", "arm_joints")) return a;
+  std::string names = in.ReadStringAttribute("/", "arm_joints");
+  for (size_t start = 0; start <= names.size();) {
+    const size_t comma = std::min(names.find(',', start), names.size());
+    if (comma > start) a.joints.push_back(names.substr(start, comma - start));
+    start = comma + 1;
+  }
+  const hsize_t n = a.joints.size();
+  if (n == 0) return a;
+  int64_t rows = 0;
+  a.time = in.Read<double>("/arm/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1, &rows);
+  a.torque_demanded =
+      in.Read<double>("/arm/torque_demanded", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
+  a.effort_limit = in.Read<double>("/arm/effort_limit", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
+  for (double bits : in.Read<double>("/arm/fault_latched", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, 1))
+    a.fault_latched.push_back(static_cast<uint64_t>(bits));
+  return a;
+}
+
+std::vector<SnapshotMesh> SavedRun::ReadSnapshotMeshes(const SnapshotInfo& snapshot) const {
+  const h5::Reader& in = impl_->in;
+  std::vector<SnapshotMesh> meshes;
+  const std::string group = snapshot.group + "/meshes";
+  if (!in.Exists(group)) return meshes;
+  for (const std::string& name : in.List(group)) {
+    const std::string base = group + "/" + name;
+    SnapshotMesh m;
+    m.name = name;
+    int64_t v = 0, t = 0;
+    m.mesh.vertices = in.ReadVectors(base + "/points", -1);
+    v = static_cast<int64_t>(m.mesh.vertices.size());
+    const std::vector<int64_t> tri =
+        in.Read<int64_t>(base + "/triangles", H5T_INTEGER, H5T_NATIVE_INT64, -1, 3, &t);
+    for (int64_t k = 0; k < t; ++k) {
+      std::array<int32_t, 3> c{};
+      for (int j = 0; j < 3; ++j) {
+        const int64_t index = tri[3 * k + j];
+        if (index < 0 || index >= v) in.Fail(base + "/triangles", "index out of range");
+        c[j] = static_cast<int32_t>(index);
+      }
+      m.mesh.triangles.push_back(c);
+    }
+    meshes.push_back(std::move(m));
+  }
+  return meshes;
+}
+
+double SavedRun::RootNumber(const std::string& name, double fallback) const {
+  if (!impl_->in.HasAttribute("/", name)) return fallback;
+  return impl_->in.ReadDoubleAttribute("/", name);
 }
 
 }  // namespace sim

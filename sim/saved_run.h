@@ -3,6 +3,7 @@
 // snapshots or its scoop's series. Public header; the HDF5 C API stays inside sim/.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,6 +33,28 @@ struct ScoopSeries {
   bool empty() const { return time.empty(); }
   // The last sample at or before `t` (1e-9 s slack for rounding); -1 when there is none.
   int SampleAt(double t) const;
+};
+
+// The last sample of `time` (ascending) at or before `t` (1e-9 s slack for rounding); -1 when
+// there is none.
+int SampleAt(const std::vector<double>& time, double t);
+
+// The arm's series of a coupled dig (/arm/...), one row per /scoop/ row.
+struct ArmSeries {
+  std::vector<std::string> joints;      // root attribute arm_joints, base to tip
+  std::vector<double> time;             // [s] (n)
+  std::vector<double> torque_demanded;  // [N m] (n x joints, row-major)
+  std::vector<double> effort_limit;     // [N m] (n x joints)
+  std::vector<uint64_t> fault_latched;  // every flag raised so far (n)
+
+  bool empty() const { return time.empty() || joints.empty(); }
+};
+
+// A mesh stored with a snapshot (/snapshots/NNNNNN/meshes/<name>, sim/h5_output.h): the parts of
+// one role together, in world coordinates.
+struct SnapshotMesh {
+  std::string name;        // "scoop", "arm", "obstacles"
+  dem::TriangleMesh mesh;  // world coordinates [m]
 };
 
 class SavedRun {
@@ -65,6 +88,13 @@ class SavedRun {
   // The /scoop/ series (time, pass, rho, force_world, pose); empty when the run had no dig.
   // Throws InputError for a series whose length differs from /scoop/time's.
   ScoopSeries Scoop() const;
+  // The /arm/ series; empty when the run had no arm. InputError for a series of the wrong shape.
+  ArmSeries Arm() const;
+  // The meshes stored with `snapshot` (none for a run without a dig, or written before them).
+  // InputError for a mesh group of the wrong shape.
+  std::vector<SnapshotMesh> ReadSnapshotMeshes(const SnapshotInfo& snapshot) const;
+  // A numeric root attribute (start_time, surface, ...); `fallback` when the file has none.
+  double RootNumber(const std::string& name, double fallback) const;
 
  private:
   struct Impl;

@@ -19,6 +19,7 @@
 #include "dem/system.h"
 #include "sim/scene.h"
 #include "sim/trajectory.h"
+#include "sim/world_view.h"
 
 namespace sim {
 
@@ -66,6 +67,9 @@ class ScoopDriver {
   }
   // The run is over: the driver's summary on stderr and, with `out`, in the file.
   virtual void Finish(H5Output* out) { (void)out; }
+  // What the driver adds to a view of the world (frames, snapshots): the arm's links, its joint
+  // torques and fault flags. The view may point into the driver until its next step.
+  virtual void AddToView(WorldView* view) const { (void)view; }
 };
 
 // The study's way: the scoop follows a tool path (Tables 1 and 4, or any list of moves), turned

@@ -269,6 +269,7 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver, const DigResume* resum
   summary_ = DigSummary{};
   summary_.particles = static_cast<int64_t>(p.size());
   t_start_ = system_->time();
+  if (out_) out_->SetAttribute("start_time", t_start_);
   step0_ = system_->step_count();
   particle_steps_ = 0;
   started_ = true;
@@ -465,7 +466,7 @@ void World::Record() {
   }
   const int64_t steps = system.step_count() - step0_;
   if (out_ && scene_.output.snapshot_every > 0 && steps % scene_.output.snapshot_every == 0)
-    out_->WriteSnapshot(system.time(), system.particles());
+    out_->WriteSnapshot(system.time(), system.particles(), View().meshes);
   // A pass ends when its driver says so; the next one begins at once.
   // RunControl::on_pass_end sees the bed between the two.
   while (dig_ && halted_after_pass_ == 0 && !Done() &&
@@ -483,6 +484,7 @@ void World::Record() {
 WorldView World::View() const {
   WorldView view;
   view.time = system_->time();
+  view.clock_start = t_start_;
   view.particles = &system_->particles();
   view.box_min = scene_.box_min;
   view.box_max = scene_.box_max;
@@ -492,9 +494,11 @@ WorldView World::View() const {
     view.rho = dig_->rho;
     view.force = dem::Norm(dig_->wrench.force_world);
     view.torque = dem::Norm(dig_->wrench.torque_world);
-    view.meshes.push_back({&system_->mesh(dig_->mesh), system_->mesh_motion(dig_->mesh).pose});
+    view.meshes.push_back(
+        {&system_->mesh(dig_->mesh), system_->mesh_motion(dig_->mesh).pose, MeshRole::kScoop});
     for (int k : obstacle_meshes_)
-      view.meshes.push_back({&system_->mesh(k), system_->mesh_motion(k).pose});
+      view.meshes.push_back({&system_->mesh(k), system_->mesh_motion(k).pose, MeshRole::kObstacle});
+    dig_->driver->AddToView(&view);
   }
   return view;
 }
@@ -503,6 +507,7 @@ void World::StartPlain() {
   started_ = true;
   if (!sleep_applied_) system_->set_sleep(scene_.sleep);
   t_start_ = next_row_ = system_->time();
+  if (out_) out_->SetAttribute("start_time", t_start_);
   step0_ = system_->step_count();
   particle_steps_ = 0;
   if (out_ && scene_.output.snapshot_every > 0)

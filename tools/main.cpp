@@ -13,13 +13,16 @@
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "arm/arm_model.h"
 #include "render/bench.h"
@@ -91,6 +94,7 @@ struct FramesArgs {
   bool video = false;
   std::string color_by;
   std::string camera;
+  std::string color_range;
 
   void AddTo(CLI::App* command, bool required, bool with_every) {
     CLI::Option* frames = command->add_option("--frames", dir,
@@ -107,6 +111,9 @@ struct FramesArgs {
     command->add_flag("--video", video, "Also assemble DIR.mp4 with ffmpeg (when installed)");
     command->add_option("--color-by", color_by, "speed|depth|material|force (default: the scene's)")
         ->check(CLI::IsMember({"speed", "depth", "material", "force"}));
+    command->add_option("--color-range", color_range,
+                        "LO,HI: the colour range of every frame (default: run: from the scene, "
+                        "render: the whole run's)");
     std::string presets;
     for (const std::string& p : render::CameraPresetNames())
       presets += (presets.empty() ? "" : "|") + p;
@@ -122,6 +129,23 @@ struct FramesArgs {
     render::FrameOptions options = render::FrameOptionsFromSpec(s);
     options.dir = dir;
     options.threads = threads;
+    if (!color_range.empty()) {
+      // Two finite numbers, LO < HI, and nothing else.
+      const char* text = color_range.c_str();
+      char* end = nullptr;
+      const double lo = std::strtod(text, &end);
+      const bool comma = end != text && *end == ',';
+      const char* second = comma ? end + 1 : end;
+      const double hi = comma ? std::strtod(second, &end) : 0.0;
+      if (!comma || end == second || *end != '\0' || !std::isfinite(lo) || !std::isfinite(hi) ||
+          !(lo < hi)) {
+        throw sim::InputError("--color-range: expected LO,HI, two numbers with LO < HI, got " +
+                              color_range);
+      }
+      options.settings.range_min = lo;
+      options.settings.range_max = hi;
+      options.range_given = true;
+    }
     return options;
   }
 
@@ -316,8 +340,14 @@ int Main(int argc, char** argv) {
       if (!run_frames.dir.empty()) {
         // Rendering happens inside the run loop's frame callback, between steps: the DEM's
         // OpenMP threads are idle then, and llvmpipe gets as many threads as the DEM had.
-        frames = std::make_unique<render::FrameSequence>(
-            run_frames.Options(scene.render, options.threads > 0 ? options.threads : AllCores()));
+        render::FrameOptions frame_options =
+            run_frames.Options(scene.render, options.threads > 0 ? options.threads : AllCores());
+        if (!frame_options.range_given) {
+          render::SceneColorRange(scene, frame_options.settings.color_by,
+                                  &frame_options.settings.range_min,
+                                  &frame_options.settings.range_max);
+        }
+        frames = std::make_unique<render::FrameSequence>(frame_options);
         options.on_frame = [&frames](const sim::WorldView& view) { frames->Add(view); };
         options.frame_every = run_frames.every > 0 ? run_frames.every : scene.render.every;
       }

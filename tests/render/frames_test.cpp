@@ -1,23 +1,28 @@
 // Frame sequences: the quick dig rendered at two times (not blank, and different), the
-// `render:` block of a scene, and the CLI end to end (`scoopsim run --frames`, `scoopsim render`).
+// `render:` block of a scene, the CLI end to end (`scoopsim run --frames`, `scoopsim render`), one
+// colour range per sequence (running and saved), and a saved run's stored meshes drawn.
 #include "render/frames.h"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "render/bench.h"
 #include "render/saved_run.h"
 #include "sim/bed.h"
-#include "sim/h5_output.h"
 #include "sim/commands.h"
+#include "sim/h5_output.h"
 #include "sim/scene.h"
 #include "tests/cli_util.h"
 
@@ -278,6 +283,164 @@ TEST(FramesTest, SavedDigDrawsTheScoop) {
     }
   EXPECT_GT(differing, 500);  // the scoop, ~0.13 x 0.08 m seen from ~0.4 m, covers thousands
   EXPECT_EQ(same, with.width() * with.height());
+}
+
+}  // namespace
+}  // namespace render
+
+namespace render {
+namespace {
+
+// One big sphere of speed `speed` in the middle of a 0.2 x 0.1 x 0.1 m box.
+dem::Particles OneSphere(double speed) {
+  dem::Particles p;
+  p.id.push_back(0);
+  p.x.push_back({0.1, 0.05, 0.03});
+  p.v.push_back({speed, 0, 0});
+  p.w.push_back({});
+  p.radius.push_back(0.03);
+  p.material.push_back(0);
+  return p;
+}
+
+FrameOptions FlatOptions(const std::string& dir) {
+  FrameOptions options;
+  options.dir = (TempDir() / dir).string();
+  options.settings.camera.width = 160;
+  options.settings.camera.height = 120;
+  options.settings.shading = false;
+  options.settings.overlays = false;
+  options.settings.scenery = false;
+  options.camera_preset = "top";
+  options.threads = 1;
+  return options;
+}
+
+std::string FileBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// A sequence keeps one colour range: a sphere at 0.2 m/s, then 1.5 m/s (beyond the range), then
+// 0.2 m/s again, in the range [0, 1]: the first and last frames are the same image, the centre
+// pixel viridis(0.2) (unlit, within 1); the middle one shows viridis(1) there. Setting the range
+// once frames are written is refused.
+TEST(FramesTest, SequenceKeepsOneColourRange) {
+  FrameOptions options = FlatOptions("fixed_range");
+  options.settings.range_min = 0;
+  options.settings.range_max = 1;
+  FrameSequence frames(options);
+  std::vector<Image> images;
+  for (double speed : {0.2, 1.5, 0.2}) {
+    const dem::Particles p = OneSphere(speed);
+    sim::WorldView view;
+    view.particles = &p;
+    view.box_max = {0.2, 0.1, 0.1};
+    frames.Add(view);
+    images.push_back(frames.renderer().image());
+  }
+  const Rgba8 first = images[0].At(80, 60), middle = images[1].At(80, 60);
+  const Rgb want = Viridis(0.2), top = Viridis(1.0);
+  EXPECT_NEAR(first.r, 255 * want.r, 1);
+  EXPECT_NEAR(first.g, 255 * want.g, 1);
+  EXPECT_NEAR(first.b, 255 * want.b, 1);
+  EXPECT_NEAR(middle.g, 255 * top.g, 1);
+  int differing = 0;
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < 160; ++x) differing += images[0].At(x, y) != images[2].At(x, y);
+  EXPECT_EQ(differing, 0);
+  EXPECT_THROW(frames.SetRange(0, 2), std::logic_error);
+}
+
+// A saved run's frames share the whole run's colour range: three snapshots of one sphere at 0.2,
+// 1.0 and 0.2 m/s render with the range [0, 1] (the largest snapshot's 99th percentile, read
+// before the first frame), so the first and last PNG files are byte for byte the same; given a
+// range (--color-range), the frames use it.
+TEST(FramesTest, SavedRunFramesShareTheWholeRunsRange) {
+  const std::string h5 = (TempDir() / "three_speeds.h5").string();
+  {
+    sim::H5Output out(h5, "box: {min: [0, 0, 0], max: [0.2, 0.1, 0.1], wall_material: wall}\n",
+                      "test");
+    for (double speed : {0.2, 1.0, 0.2}) out.WriteSnapshot(0.1, OneSphere(speed));
+    out.Close();
+  }
+  FrameSequence frames(FlatOptions("saved_range"));
+  ASSERT_EQ(RenderSavedRun(h5, &frames, true), 3);
+  EXPECT_EQ(frames.options().settings.range_min, 0);
+  EXPECT_NEAR(frames.options().settings.range_max, 1.0, 1e-6);  // stored as a float field
+  EXPECT_EQ(FileBytes(frames.FramePath(0)), FileBytes(frames.FramePath(2)));
+  EXPECT_NE(FileBytes(frames.FramePath(0)), FileBytes(frames.FramePath(1)));
+
+  FrameOptions given = FlatOptions("saved_given");
+  given.settings.range_max = 4;
+  given.range_given = true;
+  FrameSequence fixed(given);
+  RenderSavedRun(h5, &fixed, true);
+  EXPECT_EQ(fixed.options().settings.range_max, 4);
+}
+
+// A saved run's frames draw the meshes stored with each snapshot (here an "arm" link, a 4 cm box
+// over the sphere), in the arm's colour, without any mesh file.
+TEST(FramesTest, SavedRunDrawsTheSnapshotsMeshes) {
+  const std::string h5 = (TempDir() / "with_meshes.h5").string();
+  const dem::TriangleMesh box = BoxMesh({-0.02, -0.02, -0.02}, {0.02, 0.02, 0.02});
+  {
+    sim::H5Output out(h5, "box: {min: [0, 0, 0], max: [0.2, 0.1, 0.1], wall_material: wall}\n",
+                      "test");
+    dem::Pose above;
+    above.position = {0.1, 0.05, 0.08};
+    out.WriteSnapshot(0.1, OneSphere(0.2), {{&box, above, sim::MeshRole::kArmLink}});
+    out.Close();
+  }
+  FrameSequence frames(FlatOptions("saved_meshes"));
+  ASSERT_EQ(RenderSavedRun(h5, &frames, true), 1);
+  const Rgba8 c = frames.renderer().image().At(80, 60);
+  EXPECT_NEAR(c.r, 0.90 * 255, 1);
+  EXPECT_NEAR(c.g, 0.55 * 255, 1);
+  EXPECT_NEAR(c.b, 0.20 * 255, 1);
+}
+
+// A running world's range comes from its scene (color_map.h): for scenes/arm/nominal_snow.yaml
+// (box 0.15 m high, pushes at 0.05 m/s, a 5 deg/s rotation through 0 deg, r 8 mm snow) speed
+// [0, 0.05] (the push; the rotation's rate times the farthest scoop vertex is slower), depth
+// [0, 0.15], material [0, materials - 1], force [0, m |g| 0.15 / (2 r)].
+TEST(FramesTest, SceneColourRangeFollowsTheScene) {
+  const sim::Scene scene = sim::LoadScene(kSourceDir + "/scenes/arm/nominal_snow.yaml");
+  double lo = -1, hi = -1;
+  SceneColorRange(scene, ColorField::kSpeed, &lo, &hi);
+  EXPECT_EQ(lo, 0);
+  EXPECT_DOUBLE_EQ(hi, 0.05);
+  SceneColorRange(scene, ColorField::kDepth, &lo, &hi);
+  EXPECT_DOUBLE_EQ(hi, 0.15);
+  SceneColorRange(scene, ColorField::kMaterial, &lo, &hi);
+  EXPECT_EQ(hi, scene.materials.size() - 1);
+  SceneColorRange(scene, ColorField::kForce, &lo, &hi);
+  const double r = 8e-3, m = scene.materials[scene.materials.Find("snow")].density * 4.0 / 3.0 *
+                             3.14159265358979 * r * r * r;
+  EXPECT_NEAR(hi, m * 1.3 * 0.15 / (2 * r), 1e-12 * hi);
+}
+
+// --color-range other than LO,HI with LO < HI (reversed, one number, not numbers, a third value)
+// is bad input: exit 2 and one line naming the option.
+TEST(FramesTest, ColorRangeOptionIsChecked) {
+  const std::string h5 = (TempDir() / "range_cli.h5").string();
+  {
+    sim::H5Output out(h5, "box: {min: [0, 0, 0], max: [0.2, 0.1, 0.1], wall_material: wall}\n",
+                      "test");
+    out.WriteSnapshot(0.1, OneSphere(0.2));
+    out.Close();
+  }
+  const std::string err = (TempDir() / "range_cli.txt").string();
+  for (const char* range : {"2,1", "1", "a,b", "0,1,2", "0,"}) {
+    EXPECT_EQ(Scoopsim("render " + h5 + " --frames " + (TempDir() / "range_cli").string() +
+                           " --color-range " + range + " --quiet",
+                       err),
+              2)
+        << range;
+    const std::string text = FileBytes(err);
+    EXPECT_NE(text.find("--color-range: expected LO,HI"), std::string::npos) << text;
+    EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+  }
 }
 
 }  // namespace

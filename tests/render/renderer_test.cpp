@@ -1,6 +1,7 @@
 // The renderer against closed forms: where a pinhole camera puts a sphere and how large, which
 // colour the colour map gives, what an empty scene shows, that impostor depth cuts a sphere
-// against a mesh where the geometry says, and that occlusion culling leaves the image unchanged.
+// against a mesh where the geometry says, that occlusion culling leaves the image unchanged, the
+// arm's torque bars by their margin rule, that an arm link is drawn, and the caption's clock.
 // Every expectation is computed here from the camera parameters, not from render/camera.cpp.
 #include "render/renderer.h"
 
@@ -11,6 +12,7 @@
 
 #include "render/bench.h"
 #include "render/camera.h"
+#include "sim/arm_geometry.h"
 #include "sim/scene.h"
 
 namespace render {
@@ -262,6 +264,96 @@ TEST(RendererTest, OcclusionCullingKeepsTheImage) {
     for (int x = 0; x < full.width(); ++x) differing += full.At(x, y) != culled.At(x, y);
   }
   EXPECT_EQ(differing, 0);
+}
+
+// The torque bar of a joint, by the rule in renderer.h: margin m = 1 - |tau| / limit, filled
+// length min(|tau| / limit, 1) of the track, green for m > 0.25, amber for 0 < m <= 0.25, red for
+// m <= 0. Closed form at six torques; then drawn: the pixels of each bar's colour are its filled
+// length (round(fraction x 100 s) px) times its height (7 s px), s = 2 the font scale, and a bar of
+// torque 0 draws no colour at all.
+TEST(RendererTest, TorqueBarsFollowTheMarginRule) {
+  const double limit = 73;
+  struct Case {
+    double torque, margin, fraction;
+    Rgba8 color;
+  };
+  const Case cases[] = {{0, 1, 0, kMarginOk},
+                        {-36.5, 0.5, 0.5, kMarginOk},
+                        {0.8 * limit, 0.2, 0.8, kMarginWarn},
+                        {-limit, 0, 1, kMarginOver},
+                        {1.3 * limit, -0.3, 1, kMarginOver},
+                        {0.75 * limit, 0.25, 0.75, kMarginWarn}};
+  for (const Case& c : cases) {
+    const sim::JointView joint{"j", c.torque, limit};
+    EXPECT_NEAR(TorqueMargin(joint), c.margin, 1e-12) << c.torque;
+    EXPECT_NEAR(TorqueBarFraction(joint), c.fraction, 1e-12) << c.torque;
+    EXPECT_EQ(MarginColor(TorqueMargin(joint)), c.color) << c.torque;
+  }
+  Image image;
+  image.Resize(640, 360);
+  image.FillRect(0, 0, 640, 360, {255, 255, 255, 255});
+  const int s = 2;
+  DrawTorqueBars(&image,
+                 {{"j_a", 0.5 * limit, limit},
+                  {"j_b", -0.9 * limit, limit},
+                  {"j_c", 2 * limit, limit},
+                  {"j_d", 0, limit}},
+                 s, {0, 0, 0, 255});
+  int ok = 0, warn = 0, over = 0;
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x) {
+      ok += image.At(x, y) == kMarginOk;
+      warn += image.At(x, y) == kMarginWarn;
+      over += image.At(x, y) == kMarginOver;
+    }
+  EXPECT_EQ(ok, 50 * s * 7 * s);
+  EXPECT_EQ(warn, 90 * s * 7 * s);
+  EXPECT_EQ(over, 100 * s * 7 * s);
+}
+
+// An arm link is drawn: the lander arm's links (sim::ArmGeometry from assets/lander_arm.urdf) at
+// the digging pose, the camera 0.5 m from the centre of l_dist's box looking at it. Unlit, the
+// image centre shows the arm's colour (0.90, 0.55, 0.20) x 255 within 1; the same view with the
+// link's role set to scoop shows the scoop's grey there instead.
+TEST(RendererTest, ArmLinksAreDrawn) {
+  const sim::ArmGeometry arm =
+      sim::ArmGeometry::FromUrdf(std::string(SCOOPSIM_SOURCE_DIR) + "/assets/lander_arm.urdf");
+  ASSERT_EQ(arm.dof(), 6);
+  ASSERT_EQ(arm.parts(), 5);  // l_shou .. l_hand (with the grinder); l_scoop is the DEM's mesh
+  const double q[6] = {0, 0.8537, -1.5707, 0.7171, 1.5, 0};
+  sim::WorldView view;
+  dem::Particles none;
+  view.particles = &none;
+  arm.AddToView(q, sim::ArmBase{{1, 2, 0.5}, 0.3}, &view);
+  ASSERT_EQ(view.meshes.size(), 5u);
+  const int dist = 2;  // l_dist: its box is centred at (0.293, 0, -0.075) in the body frame
+  ASSERT_EQ(arm.mesh(dist).name, "l_dist");
+  const dem::Vec3 centre = dem::Apply(view.meshes[dist].pose, {0.293, 0, -0.075});
+  RenderSettings settings = PlainSettings();
+  settings.shading = false;
+  settings.camera.target = centre;
+  settings.camera.position = centre + dem::Vec3{0.2, -0.4, 0.2};
+  const Image& image = SharedRenderer().Render(view, settings);
+  const Rgba8 c = image.At(settings.camera.width / 2, settings.camera.height / 2);
+  EXPECT_NEAR(c.r, 0.90 * 255, 1);
+  EXPECT_NEAR(c.g, 0.55 * 255, 1);
+  EXPECT_NEAR(c.b, 0.20 * 255, 1);
+  for (sim::MeshView& m : view.meshes) m.role = sim::MeshRole::kScoop;
+  const Rgba8 grey = SharedRenderer()
+                         .Render(view, settings)
+                         .At(settings.camera.width / 2, settings.camera.height / 2);
+  EXPECT_NEAR(grey.r, 0.74 * 255, 1);
+  EXPECT_NEAR(grey.b, 0.80 * 255, 1);
+}
+
+// The caption's clock starts at the view's clock_start (the dig's start), not at t = 0 (the pour).
+TEST(RendererTest, CaptionClockStartsAtTheDig) {
+  sim::WorldView view;
+  view.time = 3.25;
+  view.clock_start = 1.0;
+  EXPECT_EQ(Caption(view), "t = 2.25000 s");
+  view.pass = 1;
+  EXPECT_EQ(Caption(view).rfind("t = 2.25000 s   pass 1", 0), 0u) << Caption(view);
 }
 
 // Every camera preset a scene may name (sim::kRenderCameraPresets) exists here, and frames the

@@ -13,6 +13,9 @@
 //   - each fault scene raises JOINT_TORQUE_LIMIT on j_prox_pitch, one hold time (0.1 s, within one
 //     Bullet step) after its demanded torque first reaches the effort limit: the boulder once the
 //     blade is stopped by it (after ~0.55 s of push), the worn motor as the push starts (0.2 s);
+//   - reaction retract: after the boulder's flag the scoop rises by the retract distance and the
+//     pass ends one retract and one stop_hold later;
+//   - the snapshots hold the scoop and the arm's links at the poses they had (the XDMF's meshes);
 //   - a bad arm: block or URDF in a scene exits 2 with one line naming the scene, line and key.
 #include "sim/arm_driver.h"
 
@@ -27,7 +30,9 @@
 #include <string>
 #include <vector>
 
+#include "sim/arm_geometry.h"
 #include "sim/bed_io.h"
+#include "sim/saved_run.h"
 #include "sim/scene.h"
 #include "sim/world.h"
 #include "tests/cli_util.h"
@@ -240,6 +245,124 @@ TEST(ArmDriverTest, WornMotorDiggingIceRaisesJointTorqueLimit) {
   // Holding still (0-0.2 s) is within the derated limit; the push starts at 0.2 s.
   ExpectTorqueLimitOnProxPitch(run, scene, 0.2, 0.21, start);
   EXPECT_NEAR(run.arm.effort_limit[kProxPitch], 0.16 * 73.0, 1e-9);
+}
+
+// Reaction retract: the boulder scene with arm.faults.reaction retract (up 5 cm at 2 cm/s, then a
+// 0.25 s hold). Once JOINT_TORQUE_LIMIT is raised (the path's lift comes only after the whole
+// push, 1.4 s in, so the scoop is still at its pushing depth then), the scoop's origin rises
+// by the retract distance, within 20% (the PID tracks the 2.5 s retract path with a lag and the
+// bed and boulder load the scoop), moves less than 1 cm horizontally, and the pass ends one
+// retract (2.5 s) and one stop_hold after the flag, within one DEM step.
+TEST(ArmDriverTest, BoulderWithRetractLiftsTheScoop) {
+  sim::Scene scene = Scene("fault/boulder.yaml");
+  scene.arm.reaction = sim::ArmReaction::kRetract;
+  const std::string bed = Bed(Scene("arm/nominal_snow.yaml"), "snow");
+  sim::World world(scene, 2);
+  world.LoadBed(bed);
+  auto driver = std::make_unique<sim::ArmDriver>(scene);
+  const sim::ArmDriver* arm = driver.get();
+  world.StartDig(std::move(driver));
+  ASSERT_EQ(world.system().mesh(0).triangles.size(), scene.dig.scoop.geometry.triangles.size());
+  std::vector<double> time;
+  std::vector<dem::Vec3> origin;  // the scoop's (l_scoop's) origin after each step
+  while (!world.Done()) {
+    ASSERT_TRUE(world.Step().ok());
+    time.push_back(world.system().time());
+    origin.push_back(world.system().mesh_motion(0).pose.position);
+  }
+  const sim::ArmReport& report = arm->report();
+  ASSERT_FALSE(report.events.empty());
+  const double flag = report.events.front().time;
+  EXPECT_EQ(report.events.front().flag, kJointTorqueLimit);
+  const size_t at = std::lower_bound(time.begin(), time.end(), flag) - time.begin();
+  ASSERT_LT(at, time.size());
+  const dem::Vec3 rise = origin.back() - origin[at];
+  const double length = scene.arm.retract_distance / scene.arm.retract_speed;
+  std::printf(
+      "retract: flag at %.4f s; the scoop rose %.2f mm and moved %.2f mm sideways by the "
+      "pass's end %.4f s later\n",
+      flag, 1e3 * rise.z, 1e3 * std::hypot(rise.x, rise.y), time.back() - flag);
+  EXPECT_NEAR(rise.z, scene.arm.retract_distance, 0.2 * scene.arm.retract_distance);
+  EXPECT_LT(std::hypot(rise.x, rise.y), 0.01);
+  EXPECT_NEAR(time.back() - flag, length + scene.arm.stop_hold,
+              scene.arm.substeps * scene.time_step + scene.time_step);
+}
+
+// The snapshots of a coupled dig hold the scoop and the arm's links where they were. The nominal
+// dig, stepped 0.3 s with a snapshot every 2000 steps: at each snapshot the test records the
+// scoop's DEM pose and Bullet's joint positions. In the file (read back through sim::SavedRun),
+// the scoop's points are the scene's scoop mesh moved by that pose, and the arm's points are
+// sim::ArmGeometry's link meshes at the poses forward kinematics gives for those joint positions
+// (exactly: the same double arithmetic), each with its own triangles after the previous parts'
+// vertices.
+TEST(ArmDriverTest, SnapshotsHoldTheScoopAndTheLinksWhereTheyWere) {
+  sim::Scene scene = Scene("arm/nominal_snow.yaml");
+  scene.output.snapshot_every = 2000;
+  const std::string path = (TempDir() / "snapshots.h5").string();
+  std::vector<dem::Pose> scoop;
+  std::vector<std::vector<double>> q;
+  sim::ArmBase base;
+  {
+    sim::World world(scene, 1);
+    world.LoadBed(Bed(scene, "snow"));
+    world.OpenOutput(path);
+    auto driver = std::make_unique<sim::ArmDriver>(scene);
+    const sim::ArmDriver* arm = driver.get();
+    world.StartDig(std::move(driver));
+    const double start = world.system().time();
+    int64_t snapshots = world.output()->snapshot_count();
+    while (world.system().time() - start < 0.3) {
+      ASSERT_TRUE(world.Step().ok());
+      if (world.output()->snapshot_count() == snapshots) continue;
+      snapshots = world.output()->snapshot_count();
+      scoop.push_back(world.system().mesh_motion(0).pose);
+      q.push_back(arm->JointPositions());
+    }
+    const std::vector<double>& b = arm->report().base;
+    base = {{b[0], b[1], b[2]}, b[3]};
+    world.output()->Close();
+  }
+  ASSERT_GE(scoop.size(), 3u);
+  const sim::ArmGeometry geometry(scene.arm.model);
+  const sim::SavedRun run(path);
+  const std::vector<sim::SnapshotInfo> infos = run.Snapshots();
+  ASSERT_EQ(infos.size(), scoop.size());
+  const dem::TriangleMesh& tool = scene.dig.scoop.geometry;
+  for (size_t k = 0; k < infos.size(); ++k) {
+    const std::vector<sim::SnapshotMesh> meshes = run.ReadSnapshotMeshes(infos[k]);
+    ASSERT_EQ(meshes.size(), 2u);  // sorted by name
+    ASSERT_EQ(meshes[0].name, "arm");
+    ASSERT_EQ(meshes[1].name, "scoop");
+    const dem::TriangleMesh& s = meshes[1].mesh;
+    ASSERT_EQ(s.vertices.size(), tool.vertices.size());
+    ASSERT_EQ(s.triangles, tool.triangles);
+    for (size_t v = 0; v < s.vertices.size(); ++v) {
+      const dem::Vec3 want = dem::Apply(scoop[k], tool.vertices[v]);
+      EXPECT_EQ(s.vertices[v].x, want.x);
+      EXPECT_EQ(s.vertices[v].y, want.y);
+      EXPECT_EQ(s.vertices[v].z, want.z);
+    }
+    const std::vector<dem::Pose> poses = geometry.Poses(q[k].data(), base);
+    const dem::TriangleMesh& a = meshes[0].mesh;
+    size_t v0 = 0, t0 = 0;
+    for (int part = 0; part < geometry.parts(); ++part) {
+      const dem::TriangleMesh& link = geometry.mesh(part);
+      for (size_t v = 0; v < link.vertices.size(); ++v) {
+        const dem::Vec3 want = dem::Apply(poses[part], link.vertices[v]);
+        ASSERT_LT(v0 + v, a.vertices.size());
+        EXPECT_EQ(a.vertices[v0 + v].x, want.x);
+        EXPECT_EQ(a.vertices[v0 + v].y, want.y);
+        EXPECT_EQ(a.vertices[v0 + v].z, want.z);
+      }
+      for (size_t t = 0; t < link.triangles.size(); ++t)
+        for (int c = 0; c < 3; ++c)
+          EXPECT_EQ(a.triangles[t0 + t][c], static_cast<int32_t>(v0) + link.triangles[t][c]);
+      v0 += link.vertices.size();
+      t0 += link.triangles.size();
+    }
+    EXPECT_EQ(v0, a.vertices.size());
+    EXPECT_EQ(t0, a.triangles.size());
+  }
 }
 
 // A scene with the nominal scene's keys and `arm` as its arm: block.
