@@ -1,7 +1,7 @@
 #include "sim/h5_output.h"
 
-#include <hdf5.h>
 #include <fcntl.h>
+#include <hdf5.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -46,8 +46,7 @@ void MakeParentFolders(const std::string& path) {
   std::error_code ec;
   fs::create_directories(parent, ec);
   if (ec) {
-    throw InputError(path + ": cannot create the folder " + parent.string() + ": " +
-                     ec.message());
+    throw InputError(path + ": cannot create the folder " + parent.string() + ": " + ec.message());
   }
 }
 
@@ -385,13 +384,13 @@ struct H5Output::Impl {
   std::chrono::steady_clock::time_point last_flush;
   std::map<std::string, Series, std::less<>> series;  // by absolute dataset path
   std::vector<h5::SnapshotEntry> snapshots;
-  std::string group;     // SetGroup prefix ("" or "/name")
-  h5::Handle group_obj;  // that group, once an attribute was set on it
-  int lock_fd = -1;      // holds the write lock on the file until Close()
-  int old_lock_fd = -1;  // and on the file it replaced (PutInPlace)
+  std::string group;                             // SetGroup prefix ("" or "/name")
+  h5::Handle group_obj;                          // that group, once an attribute was set on it
+  int lock_fd = -1;                              // holds the write lock on the file until Close()
+  int old_lock_fd = -1;                          // and on the file it replaced (PutInPlace)
   const h5::CleanDriverState* driver = nullptr;  // what the file driver saw (CreateFile's)
-  std::string failure;   // why writing failed; then nothing more is written
-  bool flush_due = false;  // a series holds a chunk's worth of rows
+  std::string failure;                           // why writing failed; then nothing more is written
+  bool flush_due = false;                        // a series holds a chunk's worth of rows
 
   // Runs a write; on the first failure, records the one-line reason (which file, how much is in
   // it, what it keeps) and throws it as OutputError. After a failure every write throws it again.
@@ -435,8 +434,8 @@ struct H5Output::Impl {
       }
     }
     if (longest != nullptr) {
-      message += "; it keeps the rows of the last flush (" +
-                 std::to_string(longest->rows_flushed) + " of " + *name + ")";
+      message += "; it keeps the rows of the last flush (" + std::to_string(longest->rows_flushed) +
+                 " of " + *name + ")";
     }
     return message;
   }
@@ -577,11 +576,10 @@ struct H5Output::Impl {
     for (size_t k = 0; k < cursor.snapshot_time.size(); ++k) {
       const std::string group_name = h5::SnapshotGroupName(static_cast<int64_t>(k));
       const int64_t count = cursor.snapshot_count[k];
-      const h5::Handle group(
-          h5::CheckId(H5Gcreate2(file.get(), group_name.c_str(), lcpl.get(), H5P_DEFAULT,
-                                 H5P_DEFAULT),
-                      "H5Gcreate2 " + group_name),
-          H5Gclose);
+      const h5::Handle group(h5::CheckId(H5Gcreate2(file.get(), group_name.c_str(), lcpl.get(),
+                                                    H5P_DEFAULT, H5P_DEFAULT),
+                                         "H5Gcreate2 " + group_name),
+                             H5Gclose);
       h5::WriteDoubleAttribute(group.get(), "time", cursor.snapshot_time[k]);
       for (const Field& f : fields) {
         const std::string name = group_name + "/" + f.name;
@@ -599,8 +597,41 @@ struct H5Output::Impl {
           h5::WriteArray(group.get(), f.name, f.file_type, f.memory_type, v.data(), count, f.width);
         }
       }
-      snapshots.push_back({group_name, cursor.snapshot_time[k], count});
+      h5::SnapshotEntry entry{group_name, cursor.snapshot_time[k], count, {}};
+      entry.meshes = CopyMeshes(in, group_name);
+      snapshots.push_back(std::move(entry));
     }
+  }
+
+  // The meshes of snapshot `group` in the file read by `in` (sim/internal_h5.h,
+  // WriteSnapshotMeshes), copied into this file as they are.
+  std::vector<h5::MeshEntry> CopyMeshes(const h5::Reader& in, const std::string& group) {
+    std::vector<h5::MeshEntry> entries;
+    for (const char* role : {"scoop", "arm", "obstacles"}) {
+      const std::string at = group + "/meshes/" + role;
+      if (!in.Exists(at)) continue;
+      int64_t v = 0, t = 0, parts = 0;
+      const auto points = in.Read<double>(at + "/points", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 3, &v);
+      const auto tris =
+          in.Read<int64_t>(at + "/triangles", H5T_INTEGER, H5T_NATIVE_INT64, -1, 3, &t);
+      const auto part = in.Read<int32_t>(at + "/part", H5T_INTEGER, H5T_NATIVE_INT32, t, 1);
+      const auto pose = in.Read<double>(at + "/pose", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 7, &parts);
+      h5::Handle lcpl(h5::CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
+      h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1),
+                  "H5Pset_create_intermediate_group");
+      const h5::Handle g(
+          h5::CheckId(H5Gcreate2(file.get(), at.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+                      "H5Gcreate2 " + at),
+          H5Gclose);
+      const hsize_t hv = static_cast<hsize_t>(v), ht = static_cast<hsize_t>(t);
+      h5::WriteArray(g.get(), "points", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, points.data(), hv, 3);
+      h5::WriteArray(g.get(), "triangles", H5T_STD_I64LE, H5T_NATIVE_INT64, tris.data(), ht, 3);
+      h5::WriteArray(g.get(), "part", H5T_STD_I32LE, H5T_NATIVE_INT32, part.data(), ht, 1);
+      h5::WriteArray(g.get(), "pose", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, pose.data(),
+                     static_cast<hsize_t>(parts), 7);
+      entries.push_back({role, v, t});
+    }
+    return entries;
   }
 
   void WriteAllRows() {
@@ -639,8 +670,9 @@ int PutInPlace(const std::string& temporary, const std::string& path) {
     if (old < 0) break;
     if (!LockFile(old)) {
       ::close(old);
-      throw InputError(path + ": another process (a scoopsim run?) is writing this file; give "
-                              "this run another -o");
+      throw InputError(path +
+                       ": another process (a scoopsim run?) is writing this file; give "
+                       "this run another -o");
     }
     if (::rename(temporary.c_str(), path.c_str()) == 0) return old;
     ::close(old);
@@ -729,8 +761,7 @@ void H5Output::WriteSnapshot(double time, const dem::Particles& particles,
   const int64_t index = static_cast<int64_t>(m.snapshots.size());
   m.Write([&] {
     h5::SnapshotEntry entry = h5::WriteParticleSnapshot(m.file.get(), index, time, particles);
-    if (!meshes.empty())
-      entry.meshes = h5::WriteSnapshotMeshes(m.file.get(), entry.group, meshes);
+    if (!meshes.empty()) entry.meshes = h5::WriteSnapshotMeshes(m.file.get(), entry.group, meshes);
     m.snapshots.push_back(std::move(entry));
   });
   Flush();
@@ -766,8 +797,7 @@ bool H5Output::MaybeFlush() {
   Impl& m = *impl_;
   if (!m.file.valid()) return false;
   const auto now = std::chrono::steady_clock::now();
-  if (!m.flush_due &&
-      std::chrono::duration<double>(now - m.last_flush).count() < m.flush_seconds)
+  if (!m.flush_due && std::chrono::duration<double>(now - m.last_flush).count() < m.flush_seconds)
     return false;
   Flush();
   return true;
