@@ -12,7 +12,7 @@
 # over rounds of its ratio to base's run of the same round; appends one CSV row per run to
 # bench/results/$MACHINE/contact_law_cost.csv.
 #
-#   BASE=/tmp/scoopsim_base bench/contact_law_cost.sh [STATE_SCENE] [THREADS]
+#   BASE=/tmp/scoopsim_base [NEW=build/scoopsim] bench/contact_law_cost.sh [STATE_SCENE] [THREADS]
 #     STATE_SCENE default bench/cache/dig_state.yaml (bench/run_dig_step.sh makes it), THREADS 2
 # Environment: NRUNS (5), STEPS (300), WARM (20), MACHINE (hostname), QUIET_WAIT (seconds,
 # default 0: before each run wait up to this long until no compiler, test or other scoopsim run
@@ -55,7 +55,7 @@ wait_quiet() {
 log="$work/log"
 for r in $(seq "$NRUNS"); do
   for variant in base edem cdt legacy; do
-    bin="$ROOT/build/scoopsim"
+    bin=${NEW:-$ROOT/build/scoopsim}
     [ "$variant" = base ] && bin=$BASE
     wait_quiet
     line=$("$bin" bench step "$work/$variant.yaml" --warm "$WARM" --steps "$STEPS" \
