@@ -57,8 +57,11 @@ void PairForces(ContactBatch& b, size_t nb, const PairConstants& one, double dt)
     const double nx = dx * inv_d, ny = dy * inv_d, nz = dz * inv_d;  // from i to j
     const double delta = ri + rj - dist;
     const double r_star = ri * rj / (ri + rj);
-    // Contact-point velocity of j relative to i: (v_j - v_i) - (r_i w_i + r_j w_j) x n.
-    const double ax = c.ax[e], ay = c.ay[e], az = c.az[e];
+    // Contact-point velocity of j relative to i: (v_j - v_i) - (r_i w_i + r_j w_j) x n (the sum
+    // gathered, or made here from the spins: the same operations, the same bits).
+    const double ax = kOwnSpins ? ri * c.wx[e] + rj * c.wjx[e] : c.ax[e];
+    const double ay = kOwnSpins ? ri * c.wy[e] + rj * c.wjy[e] : c.ay[e];
+    const double az = kOwnSpins ? ri * c.wz[e] + rj * c.wjz[e] : c.az[e];
     const double vx = c.dvx[e] - (ay * nz - az * ny);
     const double vy = c.dvy[e] - (az * nx - ax * nz);
     const double vz = c.dvz[e] - (ax * ny - ay * nx);
@@ -301,11 +304,11 @@ void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch
       const double rj = alike ? a.alike_radius : radius[j];
       Put(batch.dx, batch.dy, batch.dz, b, x[j] - x[i]);
       Put(batch.dvx, batch.dvy, batch.dvz, b, v[j] - v[i]);
-      Put(batch.ax, batch.ay, batch.az, b, ri * w[i] + rj * w[j]);
-      if (a.own_spins) {
+      if (a.own_spins) {  // the kernel makes r_i w_i + r_j w_j and w_i - w_j from these
         Put(batch.wx, batch.wy, batch.wz, b, w[i]);
         Put(batch.wjx, batch.wjy, batch.wjz, b, w[j]);
       } else {
+        Put(batch.ax, batch.ay, batch.az, b, ri * w[i] + rj * w[j]);
         Put(batch.wx, batch.wy, batch.wz, b, w[i] - w[j]);
       }
       batch.ri[b] = ri;

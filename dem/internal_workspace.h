@@ -71,7 +71,7 @@ struct alignas(64) ContactBatch {
   // Inputs, gathered by the scalar pass (structure of arrays, one entry per touching pair).
   double dx[K], dy[K], dz[K];     // x_j - x_i [m]
   double dvx[K], dvy[K], dvz[K];  // v_j - v_i [m/s]
-  double ax[K], ay[K], az[K];     // r_i w_i + r_j w_j [m/s]
+  double ax[K], ay[K], az[K];     // r_i w_i + r_j w_j [m/s] (the kernel makes it from own spins)
   double wx[K], wy[K], wz[K];     // w_i - w_j, or w_i when the pass takes own spins [rad/s]
   double wjx[K], wjy[K], wjz[K];  // w_j when the pass takes own spins (edem rolling) [rad/s]
   double ri[K], rj[K];            // radii [m]
