@@ -13,6 +13,7 @@
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <exception>
@@ -28,6 +29,7 @@
 #include "render/saved_run.h"
 #include "sim/commands.h"
 #include "sim/exit_status.h"
+#include "sim/preflight.h"
 #include "sim/saved_run.h"
 #include "sim/scene.h"
 #include "tools/arm_info.h"
@@ -48,6 +50,18 @@ std::string OneLine(std::string message) {
 }
 
 // Creates the folder an output file goes into (nothing to do for a bare file name).
+// A number > 0 that is finite: CLI11's PositiveNumber lets "nan" and "inf" through.
+CLI::Validator FinitePositive() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || !(v > 0))
+          return "expected a finite number > 0 (s), got " + text;
+        return "";
+      },
+      "NUMBER > 0");
+}
+
 void MakeParentDirectories(const std::string& output) {
   const std::filesystem::path parent = std::filesystem::path(output).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);
@@ -150,6 +164,10 @@ int Main(int argc, char** argv) {
   CLI::App app{"scoopsim: DEM simulation of a lander scoop digging granular terrain"};
   app.set_version_flag("--version", std::string("scoopsim ") + SCOOPSIM_VERSION);
   app.require_subcommand(1);
+  // A command-line error is bad input: one line, as for a scene.
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return "scoopsim: " + OneLine(e.what()) + " (see --help)\n";
+  });
 
   SceneCommand bed_args;
   CLI::App* bed = app.add_subcommand("bed", "Fill the scene's box, settle the bed and save it");
@@ -163,9 +181,16 @@ int Main(int argc, char** argv) {
   run->add_option("--stop-after", run_stop_after,
                   "Stop after this many simulated seconds, the output closed as on SIGINT "
                   "(default: at the scene's end)")
-      ->check(CLI::PositiveNumber);
+      ->check(FinitePositive());
   FramesArgs run_frames;
   run_frames.AddTo(run, false, true);
+
+  std::string check_scene;
+  CLI::App* check = app.add_subcommand(
+      "check",
+      "Check a scene as `run` would before any work (the scene, its mesh and bed file, the time "
+      "step, the steps and memory the run needs, the dig's path) and print the forecast");
+  check->add_option("SCENE", check_scene, "Scene file (YAML)")->required();
 
   FramesArgs render_frames;
   std::string render_input;
@@ -276,12 +301,14 @@ int Main(int argc, char** argv) {
 
   try {
     if (*bed) {
-      const sim::Scene scene = sim::LoadScene(bed_args.scene);
+      sim::Scene scene = sim::LoadScene(bed_args.scene);
+      sim::Preflight(&scene, sim::Work::kBed);
       MakeParentDirectories(bed_args.output);
       return sim::MakeBed(scene, bed_args.Options(scene));
     }
     if (*run) {
-      const sim::Scene scene = sim::LoadScene(run_args.scene);
+      sim::Scene scene = sim::LoadScene(run_args.scene);
+      sim::Preflight(&scene, sim::Work::kRun);
       MakeParentDirectories(run_args.output);
       sim::RunOptions options = run_args.Options(scene);
       options.stop_after = run_stop_after;
@@ -303,6 +330,16 @@ int Main(int argc, char** argv) {
         run_frames.MaybeVideo();
       }
       return status;
+    }
+    if (*check) {
+      sim::Scene scene = sim::LoadScene(check_scene);
+      const sim::RunForecast f = sim::Preflight(&scene, sim::Work::kRun);
+      std::printf(
+          "%s: ok: %lld particles, time step %.4g s, %.4g s simulated in about %.3g "
+          "steps, about %.3g MB of memory\n",
+          check_scene.c_str(), static_cast<long long>(f.particles), f.time_step, f.simulated,
+          f.steps, f.bytes / 1e6);
+      return 0;
     }
     if (*render_cmd) {
       // Camera, colouring and size from the run's own scene (its `render:` block), then the
