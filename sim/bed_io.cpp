@@ -183,10 +183,13 @@ void CheckFinite(const h5::Reader& in, const std::string& name,
   }
 }
 
-// A bed file's particles with their ids (ascending, unique).
+// A bed file's particles: ids (ascending, unique), centres, radii, material indices into names.
 struct BedParticles {
   std::vector<int64_t> ids;
-  BedFileParticles file;
+  std::vector<dem::Vec3> x;
+  std::vector<double> radius;
+  std::vector<int32_t> material;
+  std::vector<std::string> names;
 };
 
 // Reads and checks the particles' ids, centres, radii and materials: ids ascending, radii > 0,
@@ -195,22 +198,21 @@ struct BedParticles {
 // scoop flung may be above it), material indices into the names.
 BedParticles ReadParticles(const h5::Reader& in, const dem::Vec3& lo, const dem::Vec3& hi) {
   BedParticles bed;
-  BedFileParticles& f = bed.file;
   int64_t n = 0;
   bed.ids = in.Read<int64_t>("/particles/id", H5T_INTEGER, H5T_NATIVE_INT64, -1, 1, &n);
-  f.x = in.ReadVectors("/particles/position", n);
-  f.radius = in.Read<double>("/particles/radius", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
-  f.material = in.Read<int32_t>("/particles/material", H5T_INTEGER, H5T_NATIVE_INT32, n, 1);
-  f.names = in.ReadStrings("/materials/names");
+  bed.x = in.ReadVectors("/particles/position", n);
+  bed.radius = in.Read<double>("/particles/radius", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
+  bed.material = in.Read<int32_t>("/particles/material", H5T_INTEGER, H5T_NATIVE_INT32, n, 1);
+  bed.names = in.ReadStrings("/materials/names");
   const std::vector<int64_t>& ids = bed.ids;
   for (int64_t k = 1; k < n; ++k) {
     if (ids[k] <= ids[k - 1]) in.Fail("/particles/id", "ids must be unique and ascending");
   }
   for (int64_t k = 0; k < n; ++k) {
     const std::string particle = "particle " + std::to_string(ids[k]);
-    if (!(f.radius[k] > 0 && std::isfinite(f.radius[k])))
-      in.Fail("/particles/radius", particle + ": expected a radius > 0, got " + Num(f.radius[k]));
-    const dem::Vec3& c = f.x[k];
+    if (!(bed.radius[k] > 0 && std::isfinite(bed.radius[k])))
+      in.Fail("/particles/radius", particle + ": expected a radius > 0, got " + Num(bed.radius[k]));
+    const dem::Vec3& c = bed.x[k];
     if (!dem::IsFinite(c))
       in.Fail("/particles/position", particle + ": expected a finite centre, got " + Num(c));
     if (!(c.x >= lo.x && c.x <= hi.x && c.y >= lo.y && c.y <= hi.y && c.z >= lo.z)) {
@@ -218,11 +220,11 @@ BedParticles ReadParticles(const h5::Reader& in, const dem::Vec3& lo, const dem:
               particle + ": expected a centre inside the scene's box " + Num(lo) + " .. " +
                   Num(hi) + " m (above its floor, between its side walls), got " + Num(c));
     }
-    const int32_t i = f.material[k];
-    if (i < 0 || static_cast<size_t>(i) >= f.names.size()) {
+    const int32_t i = bed.material[k];
+    if (i < 0 || static_cast<size_t>(i) >= bed.names.size()) {
       in.Fail("/particles/material", particle + ": material index " + std::to_string(i) +
                                          " not in /materials/names (" +
-                                         std::to_string(f.names.size()) + " names)");
+                                         std::to_string(bed.names.size()) + " names)");
     }
   }
   return bed;
@@ -370,14 +372,6 @@ std::string BedSceneYaml(const std::string& path) {
   }
 }
 
-BedFileParticles ReadBedParticles(const std::string& path, const dem::Vec3& box_min,
-                                  const dem::Vec3& box_max) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": bed file not found");
-  const Handle file = h5::OpenForReading(path, false);
-  return ReadParticles(h5::Reader(path, file.get()), box_min, box_max).file;
-}
-
 void LoadBed(const std::string& path, dem::System* system) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -389,10 +383,10 @@ void LoadBed(const std::string& path, dem::System* system) {
   const dem::SystemConfig& config = system->config();
   const BedParticles bed = ReadParticles(in, config.domain_min, config.domain_max);
   const std::vector<int64_t>& ids = bed.ids;
-  const std::vector<dem::Vec3>& x = bed.file.x;
-  const std::vector<double>& radius = bed.file.radius;
-  const std::vector<int32_t>& material = bed.file.material;
-  const std::vector<std::string>& names = bed.file.names;
+  const std::vector<dem::Vec3>& x = bed.x;
+  const std::vector<double>& radius = bed.radius;
+  const std::vector<int32_t>& material = bed.material;
+  const std::vector<std::string>& names = bed.names;
   const int64_t n = static_cast<int64_t>(ids.size());
   const std::vector<dem::Vec3> v = in.ReadVectors("/particles/velocity", n);
   const std::vector<dem::Vec3> w = in.ReadVectors("/particles/angular_velocity", n);

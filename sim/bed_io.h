@@ -28,7 +28,6 @@
 #pragma once
 
 #include <string>
-#include <vector>
 
 #include "dem/system.h"
 
@@ -37,20 +36,6 @@ namespace sim {
 // Writes `system` to `path` (parent folders created; written to a temporary file and renamed, so
 // an interrupted save never leaves a partial bed). Throws sim::InputError if it cannot be created.
 void SaveBed(const std::string& path, const dem::System& system, const std::string& scene_yaml);
-
-// The particles of a bed file as far as a check before any work needs them (sim/preflight.h):
-// centres, radii and material names, in the file's order.
-struct BedFileParticles {
-  std::vector<dem::Vec3> x;       // centre [m] (N)
-  std::vector<double> radius;     // [m] (N)
-  std::vector<int32_t> material;  // index into `names` (N)
-  std::vector<std::string> names;
-};
-// Reads them, checked as LoadBed checks them (finite, radii > 0, centres above the floor and
-// between the side walls of the box [box_min, box_max], valid material indices). Throws
-// sim::InputError naming file and dataset.
-BedFileParticles ReadBedParticles(const std::string& path, const dem::Vec3& box_min,
-                                  const dem::Vec3& box_max);
 
 // Appends the saved particles to `system` (AddParticle in saved id order, so a bed loaded into an
 // empty System keeps its ids), restores their last-step force and torque and their contact

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dem/material.h"
+#include "sim/bed.h"
 #include "sim/bed_io.h"
 #include "sim/dig.h"
 #include "sim/scoop_driver.h"
@@ -55,12 +56,15 @@ struct FileBed {
   double top = 0;                         // highest particle top [m]
 };
 
-// Step 1: bed.file read and checked against the scene; the time step from its own particles.
+// Step 1: bed.file loaded (and so checked, sim/bed_io.h) into a system of the scene's model, its
+// radii checked against the scene's; its surface and top measured.
 FileBed CheckBedFile(Scene* scene) {
   BedSpec& bed = scene->bed;
-  const BedFileParticles p = ReadBedParticles(bed.file, scene->box_min, scene->box_max);
+  dem::System system(scene->materials, MakeSystemConfig(*scene));
+  LoadBed(bed.file, &system);
+  const dem::Particles& p = system.particles();
   FileBed f;
-  f.count = static_cast<int64_t>(p.x.size());
+  f.count = static_cast<int64_t>(p.size());
   if (f.count == 0) Refuse(*scene, "bed.file", "a bed with particles", bed.file, "it has none");
   f.radius_min = *std::min_element(p.radius.begin(), p.radius.end());
   f.radius_max = *std::max_element(p.radius.begin(), p.radius.end());
@@ -86,29 +90,20 @@ FileBed CheckBedFile(Scene* scene) {
   // The time step of paper eq. 4 at the smallest declared radius, for the stiffest material
   // among the file's particles (the scene's own when the bed is of bed.material). It is that of
   // the run that poured the bed, so a run from the saved bed replays it bit for bit.
-  std::vector<bool> used(p.names.size(), false);
+  std::vector<bool> used(static_cast<size_t>(scene->materials.size()), false);
   for (int32_t m : p.material) used[static_cast<size_t>(m)] = true;
   f.time_step = scene->time_step;
   for (size_t m = 0; m < used.size(); ++m) {
     if (!used[m]) continue;
-    const int index = scene->materials.Find(p.names[m]);
-    if (index < 0) {
-      Refuse(*scene, "bed.file", "a bed of materials defined in " + scene->materials_path, bed.file,
-             "its particles of material '" + p.names[m] + "' have no such material");
-    }
-    f.time_step = std::min(
-        f.time_step, scene->rayleigh_fraction * dem::RayleighTimeStep(lo, scene->materials[index]));
+    const double t = dem::RayleighTimeStep(lo, scene->materials[static_cast<int>(m)]);
+    f.time_step = std::min(f.time_step, scene->rayleigh_fraction * t);
   }
   // The surface and top as World::StartDig measures them.
-  dem::Particles particles;
-  particles.x = p.x;
-  particles.radius = p.radius;
-  particles.id.resize(p.x.size());
   const double r_max = bed.radius_max;
   const dem::Vec3 margin{4 * r_max, 4 * r_max, 0};
-  f.surface = BedSurface(particles, scene->box_min + margin, scene->box_max - margin, 4 * r_max);
+  f.surface = BedSurface(p, scene->box_min + margin, scene->box_max - margin, 4 * r_max);
   f.top = f.surface;
-  for (size_t k = 0; k < p.x.size(); ++k) f.top = std::max(f.top, p.x[k].z + p.radius[k]);
+  for (size_t k = 0; k < p.size(); ++k) f.top = std::max(f.top, p.x[k].z + p.radius[k]);
   return f;
 }
 
