@@ -153,9 +153,11 @@ BulletArm::BulletArm(const ArmModel& model, const BulletArmOptions& options)
 
   Impl& s = *impl_;
   s.inv_mass = s.mass = s.k = s.identity = Eigen::MatrixXd::Identity(n, n);
-  s.ldlt_mass = Eigen::LDLT<Eigen::MatrixXd>(n);
-  s.ldlt_k = Eigen::LDLT<Eigen::MatrixXd>(n);
-  s.ldlt_sliding = Eigen::LDLT<Eigen::MatrixXd>(n);
+  // Sized by a first factorisation, not by assigning LDLT(n): that copies the new object's
+  // uninitialised m_info, undefined behaviour (UBSan: "not a valid value for ComputationInfo").
+  s.ldlt_mass.compute(s.identity);
+  s.ldlt_k.compute(s.identity);
+  s.ldlt_sliding.compute(s.identity);
   s.v_free = s.b = s.v = s.rhs = s.v_sliding = s.qd_old = Eigen::VectorXd::Zero(n);
   s.k_sliding = Eigen::MatrixXd::Zero(n, n);
   s.sliding.reserve(n);
