@@ -178,19 +178,22 @@ RunForecast Preflight(Scene* scene, Work work) {
   f.time_step = scene->time_step;
 
   // 2. Memory.
-  const int64_t per_body =
-      bed.clump.empty() ? 1 : static_cast<int64_t>(bed.clump_template.radii.size());
-  f.particles = from_file ? file.count : bed.count * per_body;
-  f.bytes = static_cast<double>(f.particles) * kBytesPerParticle;
+  // In floating point: bed.count x spheres per clump may not fit an int64_t.
+  const double per_body =
+      bed.clump.empty() ? 1.0 : static_cast<double>(bed.clump_template.radii.size());
+  const double particles =
+      from_file ? static_cast<double>(file.count) : static_cast<double>(bed.count) * per_body;
+  f.bytes = particles * kBytesPerParticle;
   f.memory = PhysicalMemory();
   if (f.memory > 0 && f.bytes > f.memory) {
     Refuse(*scene, from_file ? "bed.file" : "bed.count",
            "a bed that fits in this machine's memory (" + Bytes(f.memory) + ")",
-           from_file ? bed.file + " of " + std::to_string(f.particles) + " particles"
+           from_file ? bed.file + " of " + std::to_string(file.count) + " particles"
                      : std::to_string(bed.count),
-           "it would need about " + Bytes(f.bytes) + " at ~" + Num(kBytesPerParticle) +
-               " bytes per particle");
+           "it would need about " + Bytes(f.bytes) + " at ~" + Bytes(kBytesPerParticle) +
+               " per particle");
   }
+  f.particles = static_cast<int64_t>(particles);
 
   // 4 first for a dig (its planned time is needed for 3): the surface and the path.
   const double r_max = bed.radius_max;
