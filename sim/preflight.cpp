@@ -84,8 +84,7 @@ FileBed CheckBedFile(Scene* scene) {
                                     ? Num(f.radius_min, 6) + " m"
                                     : Num(f.radius_min, 6) + " .. " + Num(f.radius_max, 6) + " m";
     Refuse(*scene, key, "radii that agree with bed.file " + bed.file + " (" + in_file + ")",
-           declared,
-           "the time step is set from the bed's own radii; make " + key + " those of the file");
+           declared, "the time step comes from " + key + ", so it must hold the file's radii");
   }
   // The time step of paper eq. 4 at the smallest declared radius, for the stiffest material
   // among the file's particles (the scene's own when the bed is of bed.material). It is that of
