@@ -153,8 +153,8 @@ BulletArm::BulletArm(const ArmModel& model, const BulletArmOptions& options)
 
   Impl& s = *impl_;
   s.inv_mass = s.mass = s.k = s.identity = Eigen::MatrixXd::Identity(n, n);
-  // Sized by a first factorisation (LDLT(n) leaves its status unset, and copying it reads that:
-  // UBSan's invalid enum load).
+  // Sized by a first factorisation, not by assigning LDLT(n): that copies the new object's
+  // uninitialised m_info, undefined behaviour (UBSan: "not a valid value for ComputationInfo").
   s.ldlt_mass.compute(s.identity);
   s.ldlt_k.compute(s.identity);
   s.ldlt_sliding.compute(s.identity);

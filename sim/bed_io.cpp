@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "sim/internal_h5.h"
@@ -170,6 +172,72 @@ h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& syste
   return entry;
 }
 
+// A number or a point with 6 significant digits, for messages.
+std::string Num(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", v);
+  return buffer;
+}
+std::string Num(const dem::Vec3& v) {
+  return "[" + Num(v.x) + ", " + Num(v.y) + ", " + Num(v.z) + "]";
+}
+
+// Fails on the first row of a (rows x 3) dataset that is not finite.
+void CheckFinite(const h5::Reader& in, const std::string& name,
+                 const std::vector<dem::Vec3>& rows) {
+  for (size_t k = 0; k < rows.size(); ++k) {
+    if (!dem::IsFinite(rows[k]))
+      in.Fail(name, "row " + std::to_string(k) + ": expected finite values, got " + Num(rows[k]));
+  }
+}
+
+// A bed file's particles: ids (ascending, unique), centres, radii, material indices into names.
+struct BedParticles {
+  std::vector<int64_t> ids;
+  std::vector<dem::Vec3> x;
+  std::vector<double> radius;
+  std::vector<int32_t> material;
+  std::vector<std::string> names;
+};
+
+// Reads and checks the particles' ids, centres, radii and materials: ids ascending, radii > 0,
+// centres finite and inside the box [lo, hi] (the floor and side walls hold every particle of a
+// bed, so a centre outside them is a corrupt or foreign file; the top is open: a particle the
+// scoop flung may be above it), material indices into the names.
+BedParticles ReadParticles(const h5::Reader& in, const dem::Vec3& lo, const dem::Vec3& hi) {
+  BedParticles bed;
+  int64_t n = 0;
+  bed.ids = in.Read<int64_t>("/particles/id", H5T_INTEGER, H5T_NATIVE_INT64, -1, 1, &n);
+  bed.x = in.ReadVectors("/particles/position", n);
+  bed.radius = in.Read<double>("/particles/radius", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
+  bed.material = in.Read<int32_t>("/particles/material", H5T_INTEGER, H5T_NATIVE_INT32, n, 1);
+  bed.names = in.ReadStrings("/materials/names");
+  const std::vector<int64_t>& ids = bed.ids;
+  for (int64_t k = 1; k < n; ++k) {
+    if (ids[k] <= ids[k - 1]) in.Fail("/particles/id", "ids must be unique and ascending");
+  }
+  for (int64_t k = 0; k < n; ++k) {
+    const std::string particle = "particle " + std::to_string(ids[k]);
+    if (!(bed.radius[k] > 0 && std::isfinite(bed.radius[k])))
+      in.Fail("/particles/radius", particle + ": expected a radius > 0, got " + Num(bed.radius[k]));
+    const dem::Vec3& c = bed.x[k];
+    if (!dem::IsFinite(c))
+      in.Fail("/particles/position", particle + ": expected a finite centre, got " + Num(c));
+    if (!(c.x >= lo.x && c.x <= hi.x && c.y >= lo.y && c.y <= hi.y && c.z >= lo.z)) {
+      in.Fail("/particles/position",
+              particle + ": expected a centre inside the scene's box " + Num(lo) + " .. " +
+                  Num(hi) + " m (above its floor, between its side walls), got " + Num(c));
+    }
+    const int32_t i = bed.material[k];
+    if (i < 0 || static_cast<size_t>(i) >= bed.names.size()) {
+      in.Fail("/particles/material", particle + ": material index " + std::to_string(i) +
+                                         " not in /materials/names (" +
+                                         std::to_string(bed.names.size()) + " names)");
+    }
+  }
+  return bed;
+}
+
 // The clumps of a bed file (see bed_io.h), read and checked against its particles.
 struct SavedClumps {
   std::vector<dem::ClumpTemplate> templates;
@@ -220,6 +288,14 @@ SavedClumps ReadClumps(const h5::Reader& in, const std::vector<int64_t>& ids,
   s.l = in.ReadVectors("/clumps/angular_momentum", n);
   s.f = in.ReadVectors("/clumps/force", n);
   s.t = in.ReadVectors("/clumps/torque", n);
+  const std::pair<const char*, const std::vector<dem::Vec3>*> fields[] = {
+      {"/clumps/position", &s.x},
+      {"/clumps/velocity", &s.v},
+      {"/clumps/angular_velocity", &s.w},
+      {"/clumps/angular_momentum", &s.l},
+      {"/clumps/force", &s.f},
+      {"/clumps/torque", &s.t}};
+  for (const auto& [name, field] : fields) CheckFinite(in, name, *field);
   const std::vector<double> q =
       in.Read<double>("/clumps/orientation", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 4);
   for (int64_t c = 0; c < n; ++c) {
@@ -336,19 +412,18 @@ void LoadBed(const std::string& path, dem::System* system) {
   const h5::Reader in(path, file.get());
 
   // Read and check everything before touching the system.
-  int64_t n = 0;
-  const std::vector<int64_t> ids =
-      in.Read<int64_t>("/particles/id", H5T_INTEGER, H5T_NATIVE_INT64, -1, 1, &n);
-  const std::vector<dem::Vec3> x = in.ReadVectors("/particles/position", n);
+  const dem::SystemConfig& config = system->config();
+  const BedParticles bed = ReadParticles(in, config.domain_min, config.domain_max);
+  const std::vector<int64_t>& ids = bed.ids;
+  const std::vector<dem::Vec3>& x = bed.x;
+  const std::vector<double>& radius = bed.radius;
+  const std::vector<int32_t>& material = bed.material;
+  const std::vector<std::string>& names = bed.names;
+  const int64_t n = static_cast<int64_t>(ids.size());
   const std::vector<dem::Vec3> v = in.ReadVectors("/particles/velocity", n);
   const std::vector<dem::Vec3> w = in.ReadVectors("/particles/angular_velocity", n);
   const std::vector<dem::Vec3> force = in.ReadVectors("/particles/force", n);
   const std::vector<dem::Vec3> torque = in.ReadVectors("/particles/torque", n);
-  const std::vector<double> radius =
-      in.Read<double>("/particles/radius", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
-  const std::vector<int32_t> material =
-      in.Read<int32_t>("/particles/material", H5T_INTEGER, H5T_NATIVE_INT32, n, 1);
-  const std::vector<std::string> names = in.ReadStrings("/materials/names");
   int64_t m = 0;
   const std::vector<int64_t> a =
       in.Read<int64_t>("/contacts/a", H5T_INTEGER, H5T_NATIVE_INT64, -1, 1, &m);
@@ -356,30 +431,24 @@ void LoadBed(const std::string& path, dem::System* system) {
       in.Read<int64_t>("/contacts/b", H5T_INTEGER, H5T_NATIVE_INT64, m, 1);
   const std::vector<dem::Vec3> shear = in.ReadVectors("/contacts/shear", m);
   const double time = in.ReadDoubleAttribute("/", "time");
+  const std::pair<const char*, const std::vector<dem::Vec3>*> fields[] = {
+      {"/particles/velocity", &v},
+      {"/particles/angular_velocity", &w},
+      {"/particles/force", &force},
+      {"/particles/torque", &torque},
+      {"/contacts/shear", &shear}};
+  for (const auto& [name, field] : fields) CheckFinite(in, name, *field);
+  if (!std::isfinite(time)) in.Fail("time", "expected a finite time (s), got " + Num(time));
   // Optional: which particles sleep (a mid-run state, e.g. bench/dig_state.py's).
   std::vector<uint8_t> awake;
   if (in.Exists("/particles/awake"))
     awake = in.Read<uint8_t>("/particles/awake", H5T_INTEGER, H5T_NATIVE_UINT8, n, 1);
   const SavedClumps clumps = ReadClumps(in, ids, radius, names.size());
 
-  for (int64_t k = 1; k < n; ++k) {
-    if (ids[k] <= ids[k - 1]) in.Fail("/particles/id", "ids must be unique and ascending");
-  }
-  for (int64_t k = 0; k < n; ++k) {
-    if (!(radius[k] > 0 && std::isfinite(radius[k]))) {
-      in.Fail("/particles/radius", "particle " + std::to_string(ids[k]) +
-                                       ": expected a radius > 0, got " + std::to_string(radius[k]));
-    }
-  }
   // File material index -> system material index, by name; only materials in use must exist.
   std::vector<int> material_of(names.size(), -2);  // -2: not looked up yet
   for (int64_t k = 0; k < n; ++k) {
     const int32_t i = material[k];
-    if (i < 0 || static_cast<size_t>(i) >= names.size()) {
-      in.Fail("/particles/material", "particle " + std::to_string(ids[k]) + ": material index " +
-                                         std::to_string(i) + " not in /materials/names (" +
-                                         std::to_string(names.size()) + " names)");
-    }
     if (material_of[i] == -2) material_of[i] = system->materials().Find(names[i]);
     if (material_of[i] < 0) {
       in.Fail("/materials/names",

@@ -50,7 +50,9 @@ bool ReadPourPoint(const std::string& path, const std::string& scene_yaml, PourP
 // empty System keeps its ids), restores their last-step force and torque and their contact
 // history (added to the system's existing history), and sets the system's time to the saved time.
 // Materials are matched by name. Throws sim::InputError naming the file and the dataset on a
-// missing file or dataset, a wrong shape or type, or a material the system does not have.
+// missing file or dataset, a wrong shape or type, a non-finite value, a particle whose centre is
+// outside the system's domain (the scene's box, whose top is open), or a material the system does
+// not have.
 void LoadBed(const std::string& path, dem::System* system);
 
 // The scene text a bed file was made from (its root attribute `scene_yaml`); "" when the file

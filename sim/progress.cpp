@@ -19,14 +19,16 @@ constexpr double kFirstLine = 0.5;       // seconds before the first plain (not 
 constexpr double kSamplePeriod = 0.1;    // seconds between the samples of the recent rate
 constexpr double kMinWindow = 2.0;       // the recent past is at least this long [s]
 constexpr double kWindowFraction = 0.25; // and at least this share of the elapsed time
+constexpr double kMaxClock = 1e7;        // a clock reads "--:--" from here (116 days) [s]
 
 double Seconds(std::chrono::steady_clock::duration d) {
   return std::chrono::duration<double>(d).count();
 }
 
-// "1:02:03" or "2:03" for a duration in seconds; "--:--" when unknown.
+}  // namespace
+
 std::string Clock(double seconds) {
-  if (!std::isfinite(seconds) || seconds < 0) return "--:--";
+  if (!(seconds >= 0 && seconds < kMaxClock)) return "--:--";
   const long long s = std::llround(seconds);
   char buffer[32];
   if (s >= 3600) {
@@ -36,6 +38,8 @@ std::string Clock(double seconds) {
   }
   return buffer;
 }
+
+namespace {
 
 // "label  42.0%  t 0.021/0.05 s  elapsed 0:12  ETA 0:17  3.21 M particle-steps/s"
 std::string Line(const std::string& label, double fraction, double total_time, double sim_time,

@@ -16,6 +16,10 @@
 
 namespace sim {
 
+// "1:02:03" or "2:03" for a duration in seconds; "--:--" when unknown: not finite, negative or
+// beyond 116 days (an estimate that far out is no time anyone will wait for).
+std::string Clock(double seconds);
+
 class Progress {
  public:
   // `label` starts each line; `total_time` is the simulated time of the whole run [s].

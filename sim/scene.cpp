@@ -1071,6 +1071,25 @@ InputError::InputError(std::string file, int line, std::string key, std::string 
       got_(std::move(got)),
       note_(std::move(note)) {}
 
+int SceneLine(const Scene& scene, const std::string& key) {
+  YAML::Node node;
+  try {
+    node = YAML::Load(scene.yaml_text);
+  } catch (const YAML::Exception&) {
+    return 1;
+  }
+  int line = 1;
+  for (size_t begin = 0; begin <= key.size() && node.IsMap();) {
+    const size_t dot = std::min(key.find('.', begin), key.size());
+    const YAML::Node child = node[key.substr(begin, dot - begin)];
+    if (!child) break;
+    line = LineOf(child);
+    node.reset(child);
+    begin = dot + 1;
+  }
+  return line;
+}
+
 std::vector<std::string> BuiltinClumpNames() {
   std::vector<std::string> names;
   for (const dem::ClumpTemplate& t : dem::TetrahedronTemplates()) names.push_back(t.name);
@@ -1269,6 +1288,7 @@ Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
   const double floor_area = extent.x * extent.y;
   const double settled_height =
       static_cast<double>(spec.count) * mean_volume / (kSettledSolidFraction * floor_area);
+  spec.settled_height = settled_height;
   if (settled_height > extent.z) {
     const double max_count =
         std::floor(kSettledSolidFraction * floor_area * extent.z / mean_volume);

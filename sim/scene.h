@@ -66,6 +66,8 @@ struct BedSpec {
   double settle_max_time = 5.0;       // give up settling after this simulated time [s]
   std::string file;                   // saved bed to load instead of making one (path as written,
                                       // resolved against the scene's folder); "" = make one
+  double settled_height = 0;          // [m] derived: height of the bed once settled, estimated
+                                      // at a solid fraction of 0.59 (LoadScene's box check)
 };
 
 struct OutputSpec {
@@ -215,6 +217,10 @@ Scene LoadScene(const std::string& path);
 // The same for a scene text that is not (or not yet) a file, such as a sweep's case: `path`
 // names it in messages and files named in it are relative to its folder.
 Scene LoadSceneText(const std::string& path, const std::string& yaml_text);
+
+// The 1-based line of the dotted key `key` ("bed.radius", "dig.scoop.scale") in the scene's text,
+// or of its nearest parent there; 1 when none. For errors found after LoadScene (sim/preflight.h).
+int SceneLine(const Scene& scene, const std::string& key);
 
 // The built-in clump templates' names (dem::TetrahedronTemplates), in order.
 std::vector<std::string> BuiltinClumpNames();

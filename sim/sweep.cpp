@@ -25,6 +25,7 @@
 #include "sim/h5_output.h"
 #include "sim/internal_h5.h"
 #include "sim/internal_sweep.h"
+#include "sim/preflight.h"
 #include "sim/progress.h"
 #include "sim/trajectory.h"
 #include "sim/world.h"
@@ -284,6 +285,7 @@ SweepCase MakeCase(const std::string& file, const std::string& default_base, con
     // Named "<base>#<case>" in messages: their lines are those of the case's text (stored in its
     // output), not the base file's; files named in it are found beside the base all the same.
     c.scene = LoadSceneText(base + "#" + c.name, text);
+    Preflight(&c.scene, Work::kRun);
     c.scene.path = base;
   } catch (const InputError& e) {
     // About a key the case sets (or under it, or above it: an unknown key is reported at it):

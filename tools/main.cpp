@@ -32,6 +32,7 @@
 #include "sim/checkpoint.h"
 #include "sim/commands.h"
 #include "sim/exit_status.h"
+#include "sim/preflight.h"
 #include "sim/saved_run.h"
 #include "sim/scene.h"
 #include "tools/arm_info.h"
@@ -49,6 +50,18 @@ std::string OneLine(std::string message) {
     if (c == '\n' || c == '\r') c = ' ';
   }
   return message;
+}
+
+// A number > 0 that is finite: CLI11's PositiveNumber lets "nan" and "inf" through.
+CLI::Validator FinitePositive() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || !(v > 0))
+          return "expected a finite number > 0 (s), got " + text;
+        return "";
+      },
+      "NUMBER > 0");
 }
 
 // Options shared by `bed` and `run`.
@@ -174,6 +187,10 @@ int Main(int argc, char** argv) {
   CLI::App app{"scoopsim: DEM simulation of a lander scoop digging granular terrain"};
   app.set_version_flag("--version", std::string("scoopsim ") + SCOOPSIM_VERSION);
   app.require_subcommand(1);
+  // A command-line error is bad input: one line, as for a scene.
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return "scoopsim: " + OneLine(e.what()) + " (see --help)\n";
+  });
 
   SceneCommand bed_args;
   CLI::App* bed = app.add_subcommand("bed", "Fill the scene's box, settle the bed and save it");
@@ -187,12 +204,12 @@ int Main(int argc, char** argv) {
   run->add_option("--stop-after", run_stop_after,
                   "Stop after this many simulated seconds, the output closed as on SIGINT "
                   "(default: at the scene's end)")
-      ->check(CLI::PositiveNumber);
+      ->check(FinitePositive());
   double run_checkpoint_every = 0;
   run->add_option("--checkpoint-every", run_checkpoint_every,
                   "Keep the run's whole state in OUT.restart.h5 every this many seconds of wall "
                   "time (and when stopped by a signal); removed when the run ends")
-      ->check(CLI::PositiveNumber);
+      ->check(FinitePositive());
   std::string run_resume;
   run->add_option("--resume", run_resume,
                   "Go on from OUT.restart.h5 of this output (SCENE, if given, must be the one it "
@@ -201,6 +218,13 @@ int Main(int argc, char** argv) {
   run_args.scene_option->required(false);
   FramesArgs run_frames;
   run_frames.AddTo(run, false, true);
+
+  std::string check_scene;
+  CLI::App* check = app.add_subcommand(
+      "check",
+      "Check a scene as `run` would before any work (the scene, its mesh and bed file, the time "
+      "step, the steps and memory the run needs, the dig's path) and print the forecast");
+  check->add_option("SCENE", check_scene, "Scene file (YAML)")->required();
 
   FramesArgs render_frames;
   std::string render_input;
@@ -311,7 +335,8 @@ int Main(int argc, char** argv) {
 
   try {
     if (*bed) {
-      const sim::Scene scene = sim::LoadScene(bed_args.scene);
+      sim::Scene scene = sim::LoadScene(bed_args.scene);
+      sim::Preflight(&scene, sim::Work::kBed);
       return sim::MakeBed(scene, bed_args.Options(scene));
     }
     if (*run) {
@@ -322,13 +347,14 @@ int Main(int argc, char** argv) {
         throw sim::InputError("run: -o " + run_args.output + " and --resume " + run_resume +
                               ": a resumed run writes the output it resumes; give one of them");
       // Resumed without SCENE: the scene text and path its checkpoint holds.
-      const sim::Scene scene =
+      sim::Scene scene =
           !run_args.scene.empty()
               ? sim::LoadScene(run_args.scene)
               : [&] {
                   const sim::Checkpoint c = sim::ReadCheckpoint(sim::CheckpointPath(run_resume));
                   return sim::LoadSceneText(c.scene_path, c.scene_yaml);
                 }();
+      sim::Preflight(&scene, sim::Work::kRun);
       sim::RunOptions options = run_args.Options(scene);
       options.stop_after = run_stop_after;
       options.checkpoint_every = run_checkpoint_every;
@@ -360,6 +386,16 @@ int Main(int argc, char** argv) {
         run_frames.MaybeVideo();
       }
       return status;
+    }
+    if (*check) {
+      sim::Scene scene = sim::LoadScene(check_scene);
+      const sim::RunForecast f = sim::Preflight(&scene, sim::Work::kRun);
+      std::printf(
+          "%s: ok: %lld particles, time step %.4g s, %.4g s simulated in about %.3g "
+          "steps, about %.3g MB of memory\n",
+          check_scene.c_str(), static_cast<long long>(f.particles), f.time_step, f.simulated,
+          f.steps, f.bytes / 1e6);
+      return 0;
     }
     if (*render_cmd) {
       // Camera, colouring and size from the run's own scene (its `render:` block), then the

@@ -1,0 +1,283 @@
+// Tests sim/preflight.cpp and the bed file checks of sim/bed_io.cpp: each defect of issue 22's
+// "every bad input refused, and refused early" is refused with one line that names the file, the
+// line (or the dataset) and the key, before any bed is poured or loaded, and the CLI exits 2.
+#include "sim/preflight.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "../cli_util.h"
+#include "bad_input_util.h"
+#include "sim/progress.h"
+
+namespace sim {
+namespace {
+
+namespace fs = std::filesystem;
+using scoopsim_test::DigSceneText;
+using scoopsim_test::SetBedValue;
+using scoopsim_test::WriteText;
+
+const fs::path& Dir() {
+  static const fs::path dir = scoopsim_test::ProcessTempDir("preflight");
+  return dir;
+}
+
+// The dig scene with `from` replaced by `to` in its text, written as `name`.
+std::string WriteScene(const std::string& name, const std::string& bed_file,
+                       const std::string& from = "", const std::string& to = "") {
+  std::string text = DigSceneText(bed_file);
+  if (!from.empty()) {
+    const size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << "test bug: '" << from << "' not in the scene";
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+  }
+  const fs::path path = Dir() / name;
+  WriteText(path, text);
+  return path.string();
+}
+
+// A fresh copy of the lattice bed (made once) as `name`.
+std::string Bed(const std::string& name) {
+  static const std::string lattice = [] {
+    const std::string bed = (Dir() / "lattice.h5").string();
+    scoopsim_test::WriteLatticeBed(WriteScene("lattice.yaml", ""), bed);
+    return bed;
+  }();
+  const std::string copy = (Dir() / name).string();
+  fs::copy_file(lattice, copy, fs::copy_options::overwrite_existing);
+  return copy;
+}
+
+// The InputError Preflight (after LoadScene) throws for `scene`; fails the test when none.
+InputError Refusal(const std::string& scene) {
+  try {
+    Scene loaded = LoadScene(scene);
+    Preflight(&loaded, Work::kRun);
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    return e;
+  }
+  ADD_FAILURE() << "accepted: " << scene;
+  return InputError("");
+}
+
+// `scoopsim ARGS`: exit status and stderr.
+std::string Stderr(const std::string& args, int* status) {
+  const std::string err = (Dir() / "stderr.txt").string();
+  *status = scoopsim_test::RunScoopsim(args, err);
+  std::ifstream in(err);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// `scoopsim run SCENE` is refused: exit 2, one line on stderr (no bed, no progress line) that
+// starts "scoopsim: " + `start`, and no output file.
+void ExpectRunRefused(const std::string& scene, const std::string& start) {
+  const std::string out = (Dir() / "refused" / "run.h5").string();
+  int status = -1;
+  const std::string err = Stderr("run " + scene + " -o " + out, &status);
+  EXPECT_EQ(status, 2) << err;
+  EXPECT_EQ(err.rfind("scoopsim: " + start, 0), 0u) << err;
+  EXPECT_EQ(err.find('\n'), err.size() - 1) << err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// The good case: the lattice bed under the dig scene passes, with the scene's time step.
+TEST(PreflightTest, GoodDigSceneWithItsBedPasses) {
+  Bed("good.h5");
+  Scene scene = LoadScene(WriteScene("good.yaml", "good.h5"));
+  const double dt = scene.time_step;
+  const RunForecast f = Preflight(&scene, Work::kRun);
+  EXPECT_EQ(f.particles, 1380);
+  EXPECT_EQ(f.time_step, dt);
+  EXPECT_NEAR(f.surface, 0.096, 1e-9);  // the lattice's top, measured
+  EXPECT_FALSE(f.surface_estimated);
+  EXPECT_GT(f.steps, 1e4);
+}
+
+// Defect: a bed file with NaN/inf positions was accepted (the run simulated nothing for 78 s,
+// then blamed the time step). Now refused at load, naming the file, dataset and particle; the
+// other state (velocity, force, contact shear, ...) is refused by LoadBed itself.
+TEST(PreflightTest, BedFileWithNonFinitePositionIsRefused) {
+  for (const double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL}) {
+    const std::string bed = Bed("nan.h5");
+    SetBedValue(bed, "/particles/position", 5, 0, bad);
+    const InputError e = Refusal(WriteScene("nan.yaml", "nan.h5"));
+    EXPECT_EQ(std::string(e.what()).rfind(bed + ": /particles/position: particle 5: expected a "
+                                                "finite centre, got [",
+                                          0),
+              0u)
+        << e.what();
+  }
+  ExpectRunRefused(WriteScene("nan.yaml", "nan.h5"),
+                   Dir().string() + "/nan.h5: /particles/position");
+
+  const std::string bed = Bed("nan_v.h5");
+  SetBedValue(bed, "/particles/velocity", 7, 2, std::nan(""));
+  Scene scene = LoadScene(WriteScene("nan_v.yaml", "nan_v.h5"));
+  World world(scene, 1);
+  try {
+    world.LoadBed(bed);
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              bed + ": /particles/velocity: row 7: expected finite values, got [0, 0, nan]");
+  }
+}
+
+// Defect: a bed file with particles outside the box was accepted. Its centres must lie between
+// the side walls and above the floor (the top is open: a particle the scoop flung may be above).
+TEST(PreflightTest, BedFileWithParticleOutsideTheBoxIsRefused) {
+  for (const int axis : {0, 1, 2}) {
+    const std::string bed = Bed("out.h5");
+    SetBedValue(bed, "/particles/position", 9, axis, -0.05);
+    const InputError e = Refusal(WriteScene("out.yaml", "out.h5"));
+    EXPECT_NE(std::string(e.what()).find("/particles/position: particle 9: expected a centre "
+                                         "inside the scene's box [0, 0, 0] .. [0.37, 0.17, 0.2] m"),
+              std::string::npos)
+        << e.what();
+  }
+  const std::string above = Bed("above.h5");
+  SetBedValue(above, "/particles/position", 9, 2, 0.5);
+  Scene scene = LoadScene(WriteScene("above.yaml", "above.h5"));
+  EXPECT_NO_THROW(Preflight(&scene, Work::kRun));
+}
+
+// Defect: the time step came from the scene's bed.radius, not from the bed it loads (the same
+// 8 mm bed declared as 20 mm ran with a 2.5x larger step: peak |F| 12.1 N instead of 6.7 N,
+// exit 0). A bed.radius that does not hold the file's radii is now refused; one that does sets
+// a step no larger than the bed's own smallest sphere allows.
+TEST(PreflightTest, BedRadiusThatDisagreesWithTheBedFileIsRefused) {
+  Bed("r.h5");
+  const std::string scene = WriteScene("r20.yaml", "r.h5", "radius: 8.0e-3\n  count: 1450",
+                                       "radius: 20.0e-3\n  count: 200");
+  const InputError e = Refusal(scene);
+  EXPECT_EQ(e.line(), 8);
+  EXPECT_EQ(e.key(), "bed.radius");
+  EXPECT_EQ(e.got(), "0.02 m");
+  EXPECT_NE(e.expected().find("(0.008 m)"), std::string::npos) << e.what();
+  ExpectRunRefused(scene, scene + ":8: bed.radius: expected radii that agree with bed.file");
+  // A range that holds 8 mm agrees; its step is that of its smallest radius (<= the bed's own).
+  Scene range =
+      LoadScene(WriteScene("range.yaml", "r.h5", "radius: 8.0e-3", "radius: [6e-3, 9e-3]"));
+  EXPECT_EQ(Preflight(&range, Work::kRun).time_step, range.time_step);
+  EXPECT_NEAR(range.time_step, 0.75 * LoadScene(WriteScene("r8.yaml", "r.h5")).time_step, 1e-15);
+  Refusal(WriteScene("range_hi.yaml", "r.h5", "radius: 8.0e-3", "radius: [9e-3, 1e-2]"));
+}
+
+// Defect: `--stop-after nan` was accepted (CLI11's PositiveNumber lets NaN through).
+TEST(PreflightTest, StopAfterNanIsRefused) {
+  Bed("stop.h5");
+  const std::string scene = WriteScene("stop.yaml", "stop.h5");
+  for (const char* bad : {"nan", "inf", "-1", "0", "x"}) {
+    SCOPED_TRACE(bad);
+    int status = -1;
+    const std::string err = Stderr("run " + scene + " --stop-after " + bad, &status);
+    EXPECT_EQ(status, 2);
+    EXPECT_EQ(err, std::string("scoopsim: --stop-after: expected a finite number > 0 (s), got ") +
+                       bad + " (see --help)\n");
+  }
+}
+
+// Defect: `rayleigh_fraction: 1e-300` was accepted and the run could never end. Refused with the
+// estimated number of steps, at the key that makes them too many.
+TEST(PreflightTest, RunThatCouldNeverEndIsRefusedWithItsStepCount) {
+  Bed("steps.h5");
+  const InputError e = Refusal(
+      WriteScene("rf.yaml", "steps.h5", "rayleigh_fraction: 0.25", "rayleigh_fraction: 1e-300"));
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_EQ(e.key(), "time_step.rayleigh_fraction");
+  EXPECT_EQ(e.expected(), "a run of at most 1e+10 steps");
+  EXPECT_NE(e.note().find("about 1.75e+304 steps of 1.47e-304 s"), std::string::npos) << e.what();
+  // A plain run whose duration alone is too long blames the duration.
+  const std::string text = DigSceneText("steps.h5");
+  WriteText(Dir() / "long.yaml", text.substr(0, text.find("dig:")) + "duration: 1e300\n");
+  const InputError d = Refusal((Dir() / "long.yaml").string());
+  EXPECT_EQ(d.key(), "duration") << d.what();
+}
+
+// Defects: mesh `scale: 1e300` was accepted (progress passed 100% and went on), and a mesh's
+// size was found only once the bed had been poured. The scoop is checked against the box at
+// load, before any bed: `run` exits 2 at once with no bed made.
+TEST(PreflightTest, MeshScaleSoLargeIsRefusedBeforeAnyBed) {
+  for (const char* scale : {"1e300", "1000"}) {
+    SCOPED_TRACE(scale);
+    const std::string scene =
+        WriteScene(std::string("scale") + scale + ".yaml", "", "material: aluminium",
+                   std::string("material: aluminium, scale: ") + scale);
+    const InputError e = Refusal(scene);
+    EXPECT_EQ(e.key(), "dig.scoop.scale") << e.what();
+    EXPECT_EQ(e.line(), 11);
+    ExpectRunRefused(scene, scene + ":11: dig.scoop.scale: expected a scale that makes the scoop");
+  }
+}
+
+// Counts that cannot fit in memory are refused with what they would need.
+TEST(PreflightTest, BedCountThatCannotFitInMemoryIsRefused) {
+  std::string text = DigSceneText("");
+  text.replace(text.find("max: [0.37, 0.17, 0.2]"), 22, "max: [1e5, 1e5, 1]");
+  text.replace(text.find("count: 1450"), 11, "count: 10000000000000");
+  WriteText(Dir() / "huge.yaml", text);
+  const InputError e = Refusal((Dir() / "huge.yaml").string());
+  EXPECT_EQ(e.key(), "bed.count") << e.what();
+  EXPECT_NE(e.note().find("it would need about 9.09 PiB"), std::string::npos) << e.what();
+}
+
+// Defect: a dig whose blade reaches the floor stopped mid-run as "unstable, lower the time step".
+// Refused at load, from the measured surface of a bed file or the estimated one of a bed still
+// to be poured; so is a path that drives the scoop through a side wall below the surface.
+TEST(PreflightTest, DigPathIntoTheFloorOrThroughAWallIsRefusedAtLoad) {
+  Bed("floor.h5");
+  const InputError measured =
+      Refusal(WriteScene("floor.yaml", "floor.h5", "bite_depth: 0.02", "bite_depth: 0.12"));
+  EXPECT_EQ(measured.key(), "dig.bite_depth");
+  EXPECT_EQ(measured.expected(), "a path that keeps the scoop above the floor (box.min z = 0 m)");
+  EXPECT_NE(measured.note().find("below the surface at z = 0.096 m"), std::string::npos)
+      << measured.what();
+  const InputError estimated =
+      Refusal(WriteScene("floor_pour.yaml", "", "bite_depth: 0.02", "bite_depth: 0.2"));
+  EXPECT_EQ(estimated.key(), "dig.bite_depth");
+  EXPECT_NE(estimated.note().find("the surface estimated from bed.count"), std::string::npos)
+      << estimated.what();
+  const InputError wall =
+      Refusal(WriteScene("wall.yaml", "floor.h5", "start: [0.13, 0.085]", "start: [0.01, 0.085]"));
+  EXPECT_EQ(wall.key(), "dig.trajectory.start") << wall.what();
+  ExpectRunRefused(WriteScene("floor.yaml", "floor.h5", "bite_depth: 0.02", "bite_depth: 0.12"),
+                   (Dir() / "floor.yaml").string() + ":19: dig.bite_depth: expected a path");
+}
+
+// Every shipped scene without a bed file passes (those with one name beds made by the demo).
+TEST(PreflightTest, ShippedScenesPass) {
+  const fs::path scenes = fs::path(SCOOPSIM_SOURCE_DIR) / "scenes";
+  int checked = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(scenes)) {
+    if (entry.path().extension() != ".yaml" || entry.path().filename() == "materials.yaml")
+      continue;
+    if (entry.path().parent_path().filename() == "sweeps") continue;
+    SCOPED_TRACE(entry.path().string());
+    Scene scene = LoadScene(entry.path().string());
+    if (!scene.bed.file.empty()) continue;
+    EXPECT_NO_THROW(Preflight(&scene, Work::kRun));
+    ++checked;
+  }
+  EXPECT_GT(checked, 10);
+}
+
+// Diagnostics never print non-physical times: the progress clock of a run planned for 1e299 s
+// read "ETA -153722867280912930:-8".
+TEST(PreflightTest, ProgressClockPrintsOnlyPhysicalTimes) {
+  EXPECT_EQ(Clock(3723), "1:02:03");
+  EXPECT_EQ(Clock(59.4), "0:59");
+  for (const double bad : {1e299, 1e7, -1.0, std::nan(""), HUGE_VAL})
+    EXPECT_EQ(Clock(bad), "--:--");
+}
+
+}  // namespace
+}  // namespace sim
