@@ -15,8 +15,7 @@
 #   BASE=/tmp/scoopsim_base [NEW=build/scoopsim] bench/contact_law_cost.sh [STATE_SCENE] [THREADS]
 #     STATE_SCENE default bench/cache/dig_state.yaml (bench/run_dig_step.sh makes it), THREADS 2
 # Environment: NRUNS (5), STEPS (300), WARM (20), MACHINE (hostname), QUIET_WAIT (seconds,
-# default 0: before each run wait up to this long until no compiler, test or other scoopsim run
-# is on the host, as bench/interleave.sh does).
+# default 0: bench/wait_quiet.sh).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 : "${BASE:?set BASE to the baseline scoopsim binary}"
@@ -43,15 +42,7 @@ for model in edem cdt legacy; do
   sed "s|^materials: .*|materials: $work/materials_$model.yaml|" "$scene" >"$work/$model.yaml"
 done
 
-QUIET_WAIT=${QUIET_WAIT:-0}
-wait_quiet() {
-  local waited=0
-  while [ "$waited" -lt "$QUIET_WAIT" ] &&
-    pgrep -f 'cc1plus|ctest|_tests|mpirun|scoopsim (run|bed|bench|sweep|study)' >/dev/null; do
-    sleep 5
-    waited=$((waited + 5))
-  done
-}
+. "$ROOT/bench/wait_quiet.sh"
 log="$work/log"
 for r in $(seq "$NRUNS"); do
   for variant in base edem cdt legacy; do
