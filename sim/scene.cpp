@@ -693,11 +693,7 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
     }
   }
   dig.interval = d.Number("interval", dig.interval, "a number > 0 (s)", Positive);
-  if (d.Has("start_buried")) {
-    const YAML::Node b = node["start_buried"];
-    if (!b.IsScalar() || !YAML::convert<bool>::decode(b, dig.start_buried))
-      Fail(file, LineOf(b), "dig.start_buried", "true or false", Describe(b));
-  }
+  dig.start_buried = d.Bool("start_buried", dig.start_buried);
 }
 
 // Obstacles: fixed rigid spheres in the bed (a buried boulder).
@@ -911,15 +907,7 @@ void ParseSleep(const std::string& file, const YAML::Node& node, dem::SleepConfi
   const MapReader m(file, node, "sleep",
                     {"enabled", "speed", "wake_speed", "wake_distance", "wake_margin",
                      "check_every", "quiet_checks"});
-  if (m.Has("enabled")) {
-    const YAML::Node e = node["enabled"];
-    bool v = false;
-    if (!e.IsScalar() || !YAML::convert<bool>::decode(e, v))
-      Fail(file, LineOf(e), "sleep.enabled", "true or false", Describe(e));
-    sleep->enabled = v;
-  } else {
-    sleep->enabled = true;
-  }
+  sleep->enabled = m.Bool("enabled", true);
   sleep->speed = m.Number("speed", sleep->speed, "a number > 0 (m/s)", Positive);
   sleep->wake_speed = m.Number("wake_speed", sleep->wake_speed, "a number > 0 (m/s)", Positive);
   sleep->wake_distance =
