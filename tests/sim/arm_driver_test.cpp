@@ -9,7 +9,8 @@
 //     goal, 10% of the peak, is out of reach here: the nominal dig's wrench is 0.1-1 N, a handful
 //     of 8 mm spheres, and the 0.5 mm shift alone moves it by ~26% (ARCHITECTURE.md);
 //   - determinism: the coupled dig ends in the same DEM state hash, and the same arm figures, on 1
-//     and 2 threads and on a rerun (Bullet runs on one thread; the DEM is thread-count exact);
+//     and 2 threads and on a rerun (Bullet runs on one thread; the DEM is thread-count exact),
+//     and that hash is pinned (kNominalArmHash);
 //   - each fault scene raises JOINT_TORQUE_LIMIT on j_prox_pitch, one hold time (0.1 s, within one
 //     Bullet step) after its demanded torque first reaches the effort limit: the boulder once the
 //     blade is stopped by it (after ~0.55 s of push), the worn motor as the push starts (0.2 s);
@@ -25,6 +26,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <ios>
 #include <map>
 #include <memory>
 #include <string>
@@ -188,6 +190,13 @@ TEST(ArmDriverTest, SamePathByArmAndKinematicallyGivesTheSameWrench) {
   EXPECT_LE(torque, std::max(0.10, 1.5 * torque_floor));
 }
 
+// The coupled nominal dig's DEM state hash at its end (issue 22's determinism golden, beside
+// tiny_dig's in tests/sim/world_test.cpp): the arm's controller, Bullet's step and the DEM all
+// feed it, so any change to one of them shows here. History (newest first):
+//   4f31647165f9d883  2026-12-03  pinned (edem pair kernel of 730423eb2475321e, the arm of
+//   51a08d2).
+constexpr uint64_t kNominalArmHash = 0x4f31647165f9d883ull;
+
 TEST(ArmDriverTest, CoupledDigIsDeterministicOnOneAndTwoThreadsAndRerun) {
   const sim::Scene scene = Scene("arm/nominal_snow.yaml");
   const DigRun& one = NominalArm();
@@ -199,6 +208,9 @@ TEST(ArmDriverTest, CoupledDigIsDeterministicOnOneAndTwoThreadsAndRerun) {
   EXPECT_EQ(one.arm.peak_demanded, again.arm.peak_demanded);
   EXPECT_EQ(one.arm.tracking_rms, two.arm.tracking_rms);
   EXPECT_EQ(one.force.size(), again.force.size());
+  EXPECT_EQ(one.hash, kNominalArmHash)
+      << std::hex << one.hash << ": the coupled physics changed; if on purpose, update "
+      << "kNominalArmHash and say why";
 }
 
 // The first event is JOINT_TORQUE_LIMIT on j_prox_pitch, one hold time after that joint's demand
