@@ -80,18 +80,19 @@ duration: 0.4
   if (kind == "plain") s << "duration: 2.0\n";
   if (kind == "dig") {
     // Two short passes of a level scoop: down, along, out (blade down, the second pass took the
-    // blade 0.4 mm into the box's floor, which the preflight refuses).
+    // blade 0.4 mm into the box's floor, which the preflight refuses; a plunge of 20 mm and bites
+    // of 10 mm pinched a grain between scoop and floor under the edem rolling law, 49% overlap).
     s << "dig:\n  scoop: {mesh: " << source << "/assets/scoop.stl, material: aluminium}\n"
       << R"(  trajectory:
     preset: none
     start: [0.13, 0.085]
     initial_pitch: 0
     moves:
-      - {translate: [0, 0, -1], speed: 0.1, distance: 0.02}
+      - {translate: [0, 0, -1], speed: 0.1, distance: 0.01}
       - {translate: [1, 0, 0], speed: 0.05, distance: 0.03}
-      - {translate: [0, 0, 1], speed: 0.2, distance: 0.08}
+      - {translate: [0, 0, 1], speed: 0.2, distance: 0.07}
   passes: 2
-  bite_depth: 0.01
+  bite_depth: 0.005
   interval: 1.0e-3
 )";
   }
