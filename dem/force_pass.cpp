@@ -21,23 +21,6 @@ inline void Put(double* cx, double* cy, double* cz, size_t b, const Vec3& a) {
   cz[b] = a.z;
 }
 
-// 1/sqrt(w2) for w2 > 1e-30, else 0 (|w| below 1e-15 rad/s: no rolling torque). A float
-// estimate (IEEE sqrt and division, so the same bits on every x86 CPU), then one Newton step in
-// double: relative error 1.5 e0^2 with e0 < 1.2e-7, so below 3e-14. Four float lanes cost a
-// fraction of one double square root and division, the edem model's cost per contact.
-inline double InvNorm(double w2) {
-  const double y0 = 1.0f / std::sqrt(static_cast<float>(w2));
-  const double y = y0 * (1.5 - 0.5 * w2 * y0 * y0);
-  return w2 > 1e-30 ? y : 0.0;
-}
-
-// 1/x for x > 0 within float's range: a float estimate and one Newton step (relative error
-// e0^2 < 1.5e-14).
-inline double Reciprocal(double x) {
-  const double y0 = 1.0f / static_cast<float>(x);
-  return y0 * (2.0 - x * y0);
-}
-
 // The rolling model of a batch kernel: one of RollingModel's for every contact, or each contact
 // its own (kMixedRolling, batches of several material pairs).
 constexpr int kEdemRolling = static_cast<int>(RollingModel::kEdem);
@@ -148,17 +131,14 @@ void PairForces(ContactBatch& b, size_t nb, const PairConstants& one, double dt)
       mjz = -mrz;
     }
     if constexpr (kOwnSpins && (kModel == kEdemRolling || kModel == kMixedRolling)) {
-      // edem: each particle against its own spin, lever r - delta/2. The torque on i is
-      // -min(M_i, |w_i| / (dt ΣI^-1)) w_i / |w_i| = -min(M_i / |w_i|, 1 / (dt ΣI^-1)) w_i, and
-      // zero where w_i = 0 (InvNorm gives 0) or mu_r = 0 (M_i = 0): no branch, no sqrt or
-      // division in double (InvNorm and Reciprocal are exact to ~1e-14).
+      // edem: each particle against its own spin, lever r - delta/2:
+      //   -min(M_i, |w_i| / (dt ΣI^-1)) w_i / |w_i| = -min(M_i / |w_i|, 1 / (dt ΣI^-1)) w_i,
+      // M_i = mu_r (r_i - delta/2) F_n; 1/|w_i| made once per particle (0 for one at rest).
+      const double inv_cap = 1.0 / (dt * c.inv_inertia[e]);
+      const double fi = -std::min(rolling * (ri - 0.5 * delta) * fn * c.ki[e], inv_cap);
+      const double fj = -std::min(rolling * (rj - 0.5 * delta) * fn * c.kj[e], inv_cap);
       const double wix = c.wx[e], wiy = c.wy[e], wiz = c.wz[e];
       const double wjx = c.wjx[e], wjy = c.wjy[e], wjz = c.wjz[e];
-      const double inv_cap = Reciprocal(dt * c.inv_inertia[e]);
-      const double ki = InvNorm(wix * wix + wiy * wiy + wiz * wiz);
-      const double kj = InvNorm(wjx * wjx + wjy * wjy + wjz * wjz);
-      const double fi = -std::min(rolling * (ri - 0.5 * delta) * fn * ki, inv_cap);
-      const double fj = -std::min(rolling * (rj - 0.5 * delta) * fn * kj, inv_cap);
       const bool edem = model == kEdemRolling;
       mix = edem ? fi * wix : mix;
       miy = edem ? fi * wiy : miy;
@@ -214,7 +194,8 @@ struct PassArrays {
   const double *radius, *mass, *inv_mass, *inv_inertia;
   const int32_t* mat;
   const uint8_t* awake;
-  const int32_t* busy;  // the visited particles with sleeping (compact)
+  const int32_t* busy;     // the visited particles with sleeping (compact)
+  const double* inv_spin;  // with own spins: each particle's 1/|w| (Workspace::inv_spin)
   // The near list (Workspace::near_k): each slot's partner and history.
   const int32_t *near_j, *near_off, *near_count;
   Vec3* shear;
@@ -324,6 +305,8 @@ void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch
       if (a.own_spins) {  // the kernel makes r_i w_i + r_j w_j and w_i - w_j from these
         Put(batch.wx, batch.wy, batch.wz, b, w[i]);
         Put(batch.wjx, batch.wjy, batch.wjz, b, w[j]);
+        batch.ki[b] = a.inv_spin[i];
+        batch.kj[b] = a.inv_spin[j];
       } else {
         Put(batch.ax, batch.ay, batch.az, b, ri * w[i] + rj * w[j]);
         Put(batch.wx, batch.wy, batch.wz, b, w[i] - w[j]);
@@ -417,6 +400,27 @@ void SlabPlaneForces(const PassArrays& a, const Workspace& m, int s, Vec3* plane
   }
 }
 
+// Each particle's 1/|w| (0 when w = 0), for the edem rolling torque. Made for every particle when
+// the storage changed (stale.spins), sleeping is off, or the list of the awake ones is stale; else
+// for the awake ones only: a sleeper's spin is zero, and so is its entry (zeroed with the spin
+// when it fell asleep, UpdateSleep).
+void UpdateInvSpins(Workspace& m, const Particles& p, bool sleeping, int nt) {
+  const int64_t n = static_cast<int64_t>(p.size());
+  const bool all = !sleeping || m.stale.spins || m.stale.active || m.inv_spin.size() != p.size();
+  if (m.inv_spin.size() != p.size()) m.inv_spin.resize(n);
+  double* inv_spin = m.inv_spin.data();
+  const Vec3* w = p.w.data();
+  const int32_t* active = m.active.data();
+  const int64_t count = all ? n : static_cast<int64_t>(m.active.size());
+#pragma omp parallel for schedule(static) num_threads(nt)
+  for (int64_t a = 0; a < count; ++a) {
+    const int64_t i = all ? a : active[a];
+    const double s = Norm(w[i]);
+    inv_spin[i] = s > 0.0 ? 1.0 / s : 0.0;
+  }
+  m.stale.spins = false;
+}
+
 PassArrays TakeArrays(Workspace& m, Particles& p, const SystemConfig& config, int nm) {
   PassArrays a;
   a.f = p.f.data();
@@ -431,6 +435,7 @@ PassArrays TakeArrays(Workspace& m, Particles& p, const SystemConfig& config, in
   a.mat = p.material.data();
   a.awake = p.awake.data();
   a.busy = m.busy.data();
+  a.inv_spin = m.inv_spin.data();
   a.near_j = m.near_j.data();
   a.near_off = m.near_off.data();
   a.near_count = m.near_count.data();
@@ -480,7 +485,11 @@ void ComputeForces(Workspace& m, Particles& p, const SystemConfig& config, int n
   if (m.stale.walls) ListWallVisits(m, compact, nt);
   const double t_pairs = Now();
   times->near += t_pairs - t_near;
-  const PassArrays arrays = TakeArrays(m, p, config, nm);
+  PassArrays arrays = TakeArrays(m, p, config, nm);
+  if (arrays.own_spins) {
+    UpdateInvSpins(m, p, compact, nt);
+    arrays.inv_spin = m.inv_spin.data();
+  }
   if (m.batches.size() < static_cast<size_t>(nt)) m.batches.resize(nt);
 
 #pragma omp parallel num_threads(nt)

@@ -49,6 +49,10 @@ struct Stale {
   // The visited particles with plane candidates (Workspace::wall_visit). Cleared by
   // ListWallVisits.
   bool walls = true;
+  // Every particle's 1/|w| (Workspace::inv_spin): storage reordered or resized. Else only the
+  // awake particles' change (a sleeper's spin is zero, and so is its entry). Cleared by
+  // UpdateInvSpins.
+  bool spins = true;
 };
 
 // Every particle alike: one radius, mass and moment of inertia (the common, monodisperse bed;
@@ -61,7 +65,7 @@ struct Alike {
 
 // Contacts gathered before one vectorised force evaluation (a block of particles' worth; a
 // particle with more near pairs than that comes in pieces).
-constexpr int kBatchContacts = 64;  // 44 arrays x 64 x 8 B = 22 KB: stays in L1
+constexpr int kBatchContacts = 64;  // 46 arrays x 64 x 8 B = 23 KB: stays in L1
 
 // Per-thread scratch of the force pass: the particle-pair contacts of a block of particles,
 // gathered so their forces can be computed in one vectorised loop (structure of arrays). Fixed
@@ -74,6 +78,7 @@ struct alignas(64) ContactBatch {
   double ax[K], ay[K], az[K];     // r_i w_i + r_j w_j [m/s] (the kernel makes it from own spins)
   double wx[K], wy[K], wz[K];     // w_i - w_j, or w_i when the pass takes own spins [rad/s]
   double wjx[K], wjy[K], wjz[K];  // w_j when the pass takes own spins (edem rolling) [rad/s]
+  double ki[K], kj[K];            // 1/|w_i|, 1/|w_j| (0 at rest) with own spins [s/rad]
   double ri[K], rj[K];            // radii [m]
   double inv_m_star[K];           // 1/m_i + 1/m_j [1/kg]
   double inv_inertia[K];          // 1/I_i + 1/I_j [1/(kg m^2)]
@@ -203,6 +208,10 @@ struct Workspace {
   std::vector<uint8_t> scratch_slab_awake;  // and whether each slab holds an awake particle
 
   std::vector<ContactBatch> batches;  // one per thread
+  // Each particle's 1/|w| (0 when w = 0) when some pair rolls by the edem model [s/rad] (N): made
+  // for the awake particles before each force pass, zeroed when a particle falls asleep (its spin
+  // with it), so that the pair kernel takes no square root for it.
+  std::vector<double> inv_spin;
 
   // Contact history to apply at the next build (a restored state, removed particles).
   std::vector<ContactRecord> pending;

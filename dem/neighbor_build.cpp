@@ -304,6 +304,7 @@ void Rebuild(Workspace& m, Particles& p, ClumpSet& clumps, const SystemConfig& c
   m.stale.list = false;
   m.stale.rebuild = false;
   m.stale.active = true;
+  m.stale.spins = true;  // the storage was reordered
   m.stale.busy = true;
   m.stale.near = true;
   m.stale.walls = true;

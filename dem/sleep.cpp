@@ -121,6 +121,7 @@ void ApplySleepDecisions(Workspace& m, Particles& p, const SleepConfig& sc, int 
         a = 0;
         p.v[i] = Vec3{};
         p.w[i] = Vec3{};
+        if (i < static_cast<int64_t>(m.inv_spin.size())) m.inv_spin[i] = 0;  // with the spin
         slept = 1;
       } else {
         ++a;

@@ -193,9 +193,8 @@ TEST(ArmDriverTest, SamePathByArmAndKinematicallyGivesTheSameWrench) {
 // The coupled nominal dig's DEM state hash at its end (issue 22's determinism golden, beside
 // tiny_dig's in tests/sim/world_test.cpp): the arm's controller, Bullet's step and the DEM all
 // feed it, so any change to one of them shows here. History (newest first):
-//   4f31647165f9d883  2026-12-03  pinned (edem pair kernel of 730423eb2475321e, the arm of
-//   51a08d2).
-constexpr uint64_t kNominalArmHash = 0x4f31647165f9d883ull;
+//   ad8b0ebb06884d63  2026-12-03  pinned (with tiny_dig's 3480ffbd08eaa986).
+constexpr uint64_t kNominalArmHash = 0xad8b0ebb06884d63ull;
 
 TEST(ArmDriverTest, CoupledDigIsDeterministicOnOneAndTwoThreadsAndRerun) {
   const sim::Scene scene = Scene("arm/nominal_snow.yaml");

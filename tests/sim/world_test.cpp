@@ -63,13 +63,13 @@ uint64_t StateHash(const std::string& h5) {
 }
 
 // History of kTinyDigHash (newest first):
-//   730423eb2475321e  2026-12-03  issue 18: the edem pair kernel's 1/|w| and cap in float + one
-//                                 Newton step (same law to 3e-14, other rounding).
+//   3480ffbd08eaa986  2026-12-03  issue 18: the edem pair kernel takes each particle's 1/|w|,
+//                                 made once a step (the same law, other rounding).
 //   df724007ea818c7c  2026-12-02  issue 18: the contact law's defaults became the study's code's
 //                                 (EDEM's rolling friction, the standard damping formula).
 //   832715449e8ff685  2026-12-02  snow digs at 0.3 t_R kept tiny_dig at 0.25 t_R; value of record
 //                                 when the run loop became sim::World (no physics change).
-constexpr uint64_t kTinyDigHash = 0x730423eb2475321eull;
+constexpr uint64_t kTinyDigHash = 0x3480ffbd08eaa986ull;
 
 // The contact law before issue 18 (rolling_model legacy, damping exact_restitution on every pair)
 // still gives that run's hash: old results can be reproduced bit for bit.
