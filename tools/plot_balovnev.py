@@ -12,6 +12,7 @@ phi, delta, beta) go under the title. Exit 2 with one line on stderr for a missi
 CSV. Needs python3-numpy and python3-matplotlib.
 """
 import argparse
+import re
 import sys
 
 import numpy as np
@@ -27,7 +28,10 @@ def read(path):
             lines = f.read().splitlines()
     except OSError as e:
         raise ValueError("%s: cannot read: %s" % (path, e.strerror))
-    notes = [l[1:].strip() for l in lines if l.startswith("#")]
+    # The CSV keeps every digit; the figure's notes four significant ones.
+    short = lambda m: "%.4g" % float(m.group())
+    notes = [re.sub(r"\d+\.\d{5,}(e[-+]?\d+)?", short, l[1:].strip()) for l in lines
+             if l.startswith("#")]
     body = [l for l in lines if l and not l.startswith("#")]
     if not body or tuple(body[0].split(",")) != COLUMNS:
         raise ValueError("%s: expected the header %s" % (path, ",".join(COLUMNS)))
