@@ -448,6 +448,18 @@ int Main(int argc, char** argv) {
       const sim::Scene scene = sim::LoadScene(balovnev_args.scene);
       auto options = balovnev_args.OptionsAs<sim::BalovnevStudyOptions>(scene);
       options.plot = !balovnev_no_plot;
+      // The angles' domain, in the flags' own units (sim::Balovnev checks the rest).
+      auto require = [](bool ok, const std::string& flag, const std::string& expected, double got) {
+        if (!ok)
+          throw sim::InputError("study balovnev: " + flag + ": expected " + expected + ", got " +
+                                CLI::detail::to_string(got));
+      };
+      require(balovnev_phi > 0 && balovnev_phi < 90, "--phi-deg", "a value in (0, 90)",
+              balovnev_phi);
+      require(balovnev_delta >= 0 && balovnev_delta <= balovnev_phi, "--delta-deg",
+              "a value in [0, --phi-deg]", balovnev_delta);
+      require(balovnev_rake > 0 && balovnev_rake <= 90, "--rake-deg", "a value in (0, 90]",
+              balovnev_rake);
       constexpr double kDeg = 3.14159265358979323846 / 180;
       options.soil.friction_angle = balovnev_phi * kDeg;
       options.soil.tool_friction_angle = balovnev_delta * kDeg;

@@ -320,10 +320,10 @@ TEST(BalovnevStudyTest, DeltaAbovePhiIsBadInput) {
                                        log),
             2);
   const std::string text = scoopsim_test::ReadText(log);
-  EXPECT_NE(text.find("study balovnev: Balovnev: soil-tool friction angle delta [rad]: expected a "
-                      "value in [0, phi]"),
+  EXPECT_NE(text.find("study balovnev: --delta-deg: expected a value in [0, --phi-deg], got 35"),
             std::string::npos)
       << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
   EXPECT_FALSE(fs::exists(TempDir() / "bad.h5"));
 }
 
