@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/balovnev.h"
 #include "sim/scene.h"
 #include "sim/world.h"
 #include "sim/world_view.h"
@@ -74,6 +75,32 @@ struct ShapeStudyOptions {
   std::string bed_dir;
 };
 int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options);
+
+// `scoopsim study balovnev SCENE -o OUT.h5`: the scene's dig (pass 1, as `scoopsim run` makes
+// it, into OUT.h5) against Balovnev's model (sim/balovnev.h) along the same path. Between the bed
+// and the dig the bed's surface is measured as a height field (sim::SurfaceMap: columns of one
+// particle diameter, the mean of the 3 x 3 around a point) and its solid fraction (the central
+// part, 4 radii from the side walls, up to two diameters under the mean surface); gamma =
+// solid fraction x particle density x |g|. At each /scoop/ row the cutting depth is the blade
+// tip's depth below that surface (0 above it); the DEM's horizontal force is -F_world . trench
+// (against the motion) and its vertical -F_world.z (downward, Balovnev's F_v's sense). Writes
+// OUT.balovnev.csv (one row per /scoop/ row: time since the dig began, pass, rho, tip_x, tip_y,
+// tip_z, surface, depth, dem_horizontal, dem_down, balovnev_horizontal, balovnev_vertical,
+// plugin_horizontal, plugin_vertical; '#' lines state the parameters), prints a table (ten spans of
+// the rows that cut, and their mean) on stdout, and with `plot` draws OUT.balovnev.png by
+// tools/plot_balovnev.py (/usr/bin/python3; exit 1 if that fails).
+struct BalovnevStudyOptions {
+  int threads = 0;  // 0 = all cores
+  std::string output;
+  bool quiet = false;
+  bool plot = true;
+  BalovnevTool tool;    // FACTS.md section 7's scoop
+  BalovnevSoil soil;    // phi, delta, c, q; unit_weight is measured on the bed
+  bool buried = false;  // b
+};
+int RunBalovnevStudy(const Scene& scene, const BalovnevStudyOptions& options);
+std::string BalovnevCsvPath(const std::string& output);  // OUT.h5 -> OUT.balovnev.csv
+std::string BalovnevPngPath(const std::string& output);  // OUT.h5 -> OUT.balovnev.png
 
 struct BenchSettleOptions {
   int64_t particles = 50000;

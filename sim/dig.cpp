@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <utility>
 #include <vector>
@@ -64,6 +65,53 @@ double BedSurface(const dem::Particles& p, const dem::Vec3& lo, const dem::Vec3&
       ++count;
     }
   return count > 0 ? sum / count : lo.z;
+}
+
+SurfaceMap MeasureSurfaceMap(const dem::Particles& p, const dem::Vec3& lo, const dem::Vec3& hi,
+                             double column) {
+  SurfaceMap m;
+  m.lo = lo;
+  m.column = column;
+  m.nx = std::max(1, static_cast<int>((hi.x - lo.x) / column));
+  m.ny = std::max(1, static_cast<int>((hi.y - lo.y) / column));
+  m.top.assign(static_cast<size_t>(m.nx) * m.ny, -std::numeric_limits<double>::infinity());
+  for (size_t i = 0; i < p.size(); ++i) {
+    const dem::Vec3& x = p.x[i];
+    const int cx = static_cast<int>(std::floor((x.x - lo.x) / column));
+    const int cy = static_cast<int>(std::floor((x.y - lo.y) / column));
+    if (cx < 0 || cx >= m.nx || cy < 0 || cy >= m.ny) continue;
+    double& t = m.top[static_cast<size_t>(cy) * m.nx + cx];
+    t = std::max(t, x.z + p.radius[i]);
+  }
+  return m;
+}
+
+double SurfaceMap::Height(double x, double y) const {
+  const int cx = std::clamp(static_cast<int>(std::floor((x - lo.x) / column)), 0, nx - 1);
+  const int cy = std::clamp(static_cast<int>(std::floor((y - lo.y) / column)), 0, ny - 1);
+  double sum = 0;
+  int count = 0;
+  for (int j = std::max(0, cy - 1); j <= std::min(ny - 1, cy + 1); ++j)
+    for (int i = std::max(0, cx - 1); i <= std::min(nx - 1, cx + 1); ++i) {
+      const double t = top[static_cast<size_t>(j) * nx + i];
+      if (std::isfinite(t)) {
+        sum += t;
+        ++count;
+      }
+    }
+  return count > 0 ? sum / count : std::numeric_limits<double>::quiet_NaN();
+}
+
+double SolidFraction(const dem::Particles& p, const dem::Vec3& lo, const dem::Vec3& hi) {
+  double solid = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const dem::Vec3& x = p.x[i];
+    if (x.x < lo.x || x.x >= hi.x || x.y < lo.y || x.y >= hi.y || x.z < lo.z || x.z >= hi.z)
+      continue;
+    const double r = p.radius[i];
+    solid += 4.0 / 3.0 * M_PI * r * r * r;
+  }
+  return solid / ((hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z));
 }
 
 std::vector<int64_t> ParticlesInCavity(const dem::Particles& p, const dem::Pose& pose,

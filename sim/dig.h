@@ -39,6 +39,28 @@ ScoopWrench ComputeScoopWrench(const dem::MeshWrench& wrench, const dem::Pose& p
 // [lo, hi] (x, y), of the highest particle top (z + r) in each column; empty columns are skipped.
 double BedSurface(const dem::Particles& p, const dem::Vec3& lo, const dem::Vec3& hi, double column);
 
+// The free surface of a bed as a height field (the local surface `scoopsim study balovnev` cuts
+// below): top[cy * nx + cx] is the highest particle top (z + r) among the particles whose centres
+// lie in square column (cx, cy) of side `column` from `lo` (x, y); -inf for an empty column.
+struct SurfaceMap {
+  dem::Vec3 lo;       // corner of column (0, 0) [m]
+  double column = 0;  // side of a column [m]
+  int nx = 0, ny = 0;
+  std::vector<double> top;  // [m] (nx x ny)
+  // The surface at (x, y) [m]: the mean of the non-empty columns among the 3 x 3 around the one
+  // holding (x, y) (clamped to the grid), so one grain standing proud moves it by a ninth; NaN
+  // when all nine are empty.
+  double Height(double x, double y) const;
+};
+// Columns of side `column` > 0 over [lo, hi] (x, y), as many as fit (at least one each way).
+SurfaceMap MeasureSurfaceMap(const dem::Particles& p, const dem::Vec3& lo, const dem::Vec3& hi,
+                             double column);
+
+// Solid fraction of the bed in the box [lo, hi]: the volume of the spheres whose centres lie in it
+// over the box's volume (spheres cut by the box's faces count whole, so keep the box a few
+// diameters inside the bed). Clump spheres count whole: their overlaps are counted twice.
+double SolidFraction(const dem::Particles& p, const dem::Vec3& lo, const dem::Vec3& hi);
+
 // Persistent ids of the particles whose centres lie inside the box [cavity_min, cavity_max] of
 // the l_scoop frame at `pose`, and their total mass [kg]. With `clumps`, a clump counts by its
 // centre of mass: all its spheres or none, and its mass once.

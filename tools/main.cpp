@@ -6,6 +6,8 @@
 //   scoopsim render OUT.h5 --frames DIR [--video] [--color-by F] [--camera PRESET]
 //   scoopsim bench render --particles N --frames F [--threads T]
 //   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
+//   scoopsim study balovnev SCENE [-o OUT.h5] [--phi-deg P] [--delta-deg D] [--buried]
+//                                            the dig against Balovnev's model (table + PNG)
 //   scoopsim sweep SWEEP.yaml -o DIR; scoopsim table build|query|export-csv (tools/sweep_cli.h)
 //   scoopsim arm info URDF [--gravity G]     the parsed arm and its gravity torques
 // Exit status: sim/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
@@ -90,13 +92,18 @@ struct SceneCommand {
     command->add_flag("-q,--quiet", quiet, "No progress output");
   }
 
-  // The scene, and run options where the command line overrides the scene.
-  sim::RunOptions Options(const sim::Scene& loaded) const {
-    sim::RunOptions options;
+  // The scene, and run options where the command line overrides the scene (a study's options
+  // too: any struct with threads, output and quiet).
+  template <typename T>
+  T OptionsAs(const sim::Scene& loaded) const {
+    T options;
     options.threads = threads_option->count() > 0 ? threads : loaded.threads;
     options.output = output;
     options.quiet = quiet;
     return options;
+  }
+  sim::RunOptions Options(const sim::Scene& loaded) const {
+    return OptionsAs<sim::RunOptions>(loaded);
   }
 };
 
@@ -243,12 +250,19 @@ int Main(int argc, char** argv) {
 
   CLI::App* study = app.add_subcommand("study", "Studies of the reference paper");
   study->require_subcommand(1);
+  // A study: a subcommand with a scene, an output, --threads and --quiet.
+  auto add_study = [study](SceneCommand* args, const char* name, const char* help,
+                           const char* output) {
+    CLI::App* command = study->add_subcommand(name, help);
+    args->AddTo(command, output);
+    return command;
+  };
   SceneCommand shape_args;
-  CLI::App* shape = study->add_subcommand(
-      "shape",
+  CLI::App* shape = add_study(
+      &shape_args, "shape",
       "Shape-complexity study (paper Table 3, Fig. 8): the scene's dig on a bed of each clump "
-      "template; wrench and wall time per template in one HDF5 file");
-  shape_args.AddTo(shape, "out/shape_study.h5");
+      "template; wrench and wall time per template in one HDF5 file",
+      "out/shape_study.h5");
   std::vector<std::string> shape_templates;
   std::string shape_beds;
   shape
@@ -258,6 +272,24 @@ int Main(int argc, char** argv) {
   shape->add_option("--beds", shape_beds,
                     "Folder of the beds: DIR/<template>.h5 is loaded if present and made from "
                     "the same scene text, else made and saved there");
+
+  SceneCommand balovnev_args;
+  CLI::App* balovnev = add_study(
+      &balovnev_args, "balovnev",
+      "The scene's dig (pass 1) against Balovnev's analytical model (FACTS.md section 7) along "
+      "the same path: OUT.h5 (the dig), OUT.balovnev.csv, a table on stdout, OUT.balovnev.png",
+      "out/balovnev.h5");
+  double balovnev_phi = 44, balovnev_delta = 28, balovnev_rake = 10;
+  bool balovnev_buried = false, balovnev_no_plot = false;
+  balovnev->add_option("--phi-deg", balovnev_phi, "Internal friction angle phi [deg]")
+      ->capture_default_str();
+  balovnev
+      ->add_option("--delta-deg", balovnev_delta, "Soil-tool friction angle delta [deg], <= phi")
+      ->capture_default_str();
+  balovnev->add_option("--rake-deg", balovnev_rake, "Rake angle beta of the blade [deg]")
+      ->capture_default_str();
+  balovnev->add_flag("--buried", balovnev_buried, "b = 1: the bucket is buried (default b = 0)");
+  balovnev->add_flag("--no-plot", balovnev_no_plot, "Do not draw OUT.balovnev.png");
 
   CLI::App* bench = app.add_subcommand("bench", "Benchmarks");
   bench->require_subcommand(1);
@@ -347,13 +379,10 @@ int Main(int argc, char** argv) {
         throw sim::InputError("run: -o " + run_args.output + " and --resume " + run_resume +
                               ": a resumed run writes the output it resumes; give one of them");
       // Resumed without SCENE: the scene text and path its checkpoint holds.
-      sim::Scene scene =
-          !run_args.scene.empty()
-              ? sim::LoadScene(run_args.scene)
-              : [&] {
-                  const sim::Checkpoint c = sim::ReadCheckpoint(sim::CheckpointPath(run_resume));
-                  return sim::LoadSceneText(c.scene_path, c.scene_yaml);
-                }();
+      sim::Scene scene = !run_args.scene.empty() ? sim::LoadScene(run_args.scene) : [&] {
+        const sim::Checkpoint c = sim::ReadCheckpoint(sim::CheckpointPath(run_resume));
+        return sim::LoadSceneText(c.scene_path, c.scene_yaml);
+      }();
       sim::Preflight(&scene, sim::Work::kRun);
       sim::RunOptions options = run_args.Options(scene);
       options.stop_after = run_stop_after;
@@ -410,14 +439,33 @@ int Main(int argc, char** argv) {
     }
     if (*shape) {
       const sim::Scene scene = sim::LoadScene(shape_args.scene);
-      const sim::RunOptions run = shape_args.Options(scene);
-      sim::ShapeStudyOptions options;
-      options.threads = run.threads;
-      options.output = run.output;
-      options.quiet = run.quiet;
+      auto options = shape_args.OptionsAs<sim::ShapeStudyOptions>(scene);
       options.templates = shape_templates;
       options.bed_dir = shape_beds;
       return sim::RunShapeStudy(scene, options);
+    }
+    if (*balovnev) {
+      const sim::Scene scene = sim::LoadScene(balovnev_args.scene);
+      auto options = balovnev_args.OptionsAs<sim::BalovnevStudyOptions>(scene);
+      options.plot = !balovnev_no_plot;
+      // The angles' domain, in the flags' own units (sim::Balovnev checks the rest).
+      auto require = [](bool ok, const std::string& flag, const std::string& expected, double got) {
+        if (!ok)
+          throw sim::InputError("study balovnev: " + flag + ": expected " + expected + ", got " +
+                                CLI::detail::to_string(got));
+      };
+      require(balovnev_phi > 0 && balovnev_phi < 90, "--phi-deg", "a value in (0, 90)",
+              balovnev_phi);
+      require(balovnev_delta >= 0 && balovnev_delta <= balovnev_phi, "--delta-deg",
+              "a value in [0, --phi-deg]", balovnev_delta);
+      require(balovnev_rake > 0 && balovnev_rake <= 90, "--rake-deg", "a value in (0, 90]",
+              balovnev_rake);
+      constexpr double kDeg = 3.14159265358979323846 / 180;
+      options.soil.friction_angle = balovnev_phi * kDeg;
+      options.soil.tool_friction_angle = balovnev_delta * kDeg;
+      options.tool.rake = balovnev_rake * kDeg;
+      options.buried = balovnev_buried;
+      return sim::RunBalovnevStudy(scene, options);
     }
     if (*settle) return sim::BenchSettle(bench_options);
     if (*step) return sim::BenchStep(step_options);

@@ -7,12 +7,20 @@
 Reads the scoop time series of scoopsim run files (SI units):
   /scoop/time (n) [s], /scoop/pass (n), /scoop/rho (n) [m],
   /scoop/force_<frame>, /scoop/torque_<frame> (n x 3) [N], [N m],
-  /scoop/collected_mass (P) [kg] (optional: added to the legend).
+  /scoop/collected_mass (P) [kg] (optional: added to the legend),
+  /scoop/pose (n x 7: position, quaternion w x y z of l_scoop in world; optional: the segments).
 Draws |F| and |T| on the top row, Fx Fy Fz and Tx Ty Tz of the chosen frame (default body: the
-paper's Fig. 1 frame) below, against rho in mm (0..450 like the paper). Each series is drawn raw
-(thin, light) and smoothed by a centred moving average over --smooth samples (odd; 1 = none).
-One line per run and pass: all passes, or only pass N with --pass N. Legend: the file stem, or
---labels.
+paper's Fig. 1 frame) below, against rho in mm: the scoop CoM's horizontal travel along the
+trench since the pass's first contact (the paper's rho), from 0 to the largest rho in the data
+(--rho-max MM sets it, e.g. 450 for the paper's axis). Each series is drawn raw (thin, light) and
+smoothed by a centred moving average over --smooth samples (odd; 1 = none). One line per run and
+pass: all passes, or only pass N with --pass N. Legend: the file stem, or --labels.
+
+The trajectory's segments (the paper's Fig. 9-11 mark them on the rho axis) are read from the
+first line's poses: each row is a rotation when the scoop's pitch changes by more than 1e-6 rad
+from the previous row, else a descent (vertical travel), a push (horizontal travel) or a hold; a
+change of kind is a boundary, drawn as a dotted line at that row's rho with the segment's name
+above the top panels (segments shorter than 3 rows are merged into the previous one).
 
 A shape-study file (scoopsim study shape: one group per clump template, each with a run's /scoop
 datasets) counts as one run per template, in the study's order, labelled with the template and
@@ -78,6 +86,7 @@ def read_run(f, path, frame, group):
                              "with the scoop time series)" % (path, scoop, name))
     run = {name: np.asarray(f[scoop + name][()], dtype=float) for name in names}
     mass = f[scoop + "collected_mass"][()] if scoop + "collected_mass" in f else None
+    pose = np.asarray(f[scoop + "pose"][()], dtype=float) if scoop + "pose" in f else None
     n = run["time"].shape[0]
     for name in names:
         want = (n, 3) if name.startswith(("force", "torque")) else (n,)
@@ -91,6 +100,7 @@ def read_run(f, path, frame, group):
         "force": run["force_" + frame],
         "torque": run["torque_" + frame],
         "collected_mass": None if mass is None else np.atleast_1d(np.asarray(mass, dtype=float)),
+        "pose": pose if pose is not None and pose.shape == (n, 7) else None,
     }
 
 
@@ -108,8 +118,63 @@ def smooth(y, window):
         return np.where(count > 0, total / np.maximum(count, 1), np.nan)
 
 
+def pitch(pose):
+    """Pitch [rad] of the blade (l_scoop +x) from horizontal, per row of /scoop/pose."""
+    q = pose[:, 3:7]
+    norm = np.linalg.norm(q, axis=1)
+    q = q / np.where(norm > 0, norm, 1.0)[:, None]
+    w, x, y, z = q.T
+    # l_scoop +x in world: the first column of the rotation matrix.
+    ex = np.stack([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)], axis=1)
+    return np.arctan2(-ex[:, 2], np.hypot(ex[:, 0], ex[:, 1])), norm > 0
+
+
+def segments(pose, rho_mm):
+    """[(name, rho_mm at its start)] of the trajectory's segments (see the module's doc), or []
+    without poses."""
+    if pose is None or len(pose) < 3:
+        return []
+    theta, valid = pitch(pose)
+    if not valid.all():
+        return []
+    d_theta = np.abs(np.diff(theta))
+    step = np.diff(pose[:, :3], axis=0)
+    horizontal = np.hypot(step[:, 0], step[:, 1])
+    vertical = np.abs(step[:, 2])
+    kinds = np.where(d_theta > 1e-6, "rotation",
+                     np.where(np.maximum(horizontal, vertical) < 1e-9, "hold",
+                              np.where(vertical > horizontal, "descent", "push")))
+    runs = []  # [kind, first row, rows]
+    for k, kind in enumerate(kinds):
+        if runs and runs[-1][0] == kind:
+            runs[-1][2] += 1
+        else:
+            runs.append([kind, k, 1])
+    merged = []  # a run of under 3 rows is a row across a boundary: part of the previous one
+    for r in runs:
+        if merged and (r[2] < 3 or merged[-1][0] == r[0]):
+            merged[-1][2] += r[2]
+        else:
+            merged.append(r)
+    totals = {}
+    for kind, _, _ in merged:
+        totals[kind] = totals.get(kind, 0) + 1
+    seen = {}
+    named = []
+    for kind, first, _ in merged:
+        seen[kind] = seen.get(kind, 0) + 1
+        name = kind if totals[kind] == 1 else "%s %d" % (kind, seen[kind])
+        named.append((name, float(rho_mm[first])))
+    # Before first contact rho is 0: keep only the segment in force when contact begins; a
+    # segment over which rho does not move (a hold at the push's end) gives way to the next.
+    before = [m for m in named if m[1] <= 0]
+    named = before[-1:] + [m for m in named if m[1] > 0]
+    return [m for k, m in enumerate(named)
+            if k + 1 == len(named) or named[k + 1][1] - m[1] > 0.5]
+
+
 def series(runs, labels, pass_filter):
-    """[(label, rho_mm, force (n x 3), torque (n x 3))], one per run and pass."""
+    """[(label, rho_mm, force (n x 3), torque (n x 3), segments)], one per run and pass."""
     out = []
     for run, label in zip(runs, labels):
         passes = sorted(set(run["pass"].tolist()))
@@ -121,11 +186,14 @@ def series(runs, labels, pass_filter):
             mass = run["collected_mass"]
             if mass is not None and 1 <= p <= mass.size:
                 text += " (%.1f g)" % (1e3 * mass[p - 1])
-            out.append((text, 1e3 * run["rho"][rows], run["force"][rows], run["torque"][rows]))
+            rho_mm = 1e3 * run["rho"][rows]
+            pose = None if run["pose"] is None else run["pose"][rows]
+            out.append((text, rho_mm, run["force"][rows], run["torque"][rows],
+                        segments(pose, rho_mm)))
     return out
 
 
-def plot(lines, frame, window, title, out_path, force_only=False):
+def plot(lines, frame, window, title, out_path, force_only=False, rho_max=None):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -149,11 +217,14 @@ def plot(lines, frame, window, title, out_path, force_only=False):
                            lambda f, t, i=i: t[:, i]))
 
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    # The paper's rho axis runs to 450 mm; a short dig (a study on a small bed) keeps its own.
-    rho_seen = max([0.0] + [float(np.nanmax(r)) for _, r, _, _ in lines if r.size])
-    rho_max = 450.0 if rho_seen > 100.0 else max(rho_seen, 1.0)
+    # The axis ends at the data's largest rho (a pass of the paper's 0.3 m push ends near 240 mm,
+    # not at its 450 mm axis), or at --rho-max.
+    rho_seen = max([0.0] + [float(np.nanmax(r)) for _, r, _, _, _ in lines if r.size])
+    if rho_max is None:
+        rho_max = max(1.02 * rho_seen, 1.0)
+    marks = lines[0][4]
     for ax, ylabel, value in panels:
-        for k, (label, rho, force, torque) in enumerate(lines):
+        for k, (label, rho, force, torque, _) in enumerate(lines):
             colour = colours[k % len(colours)]
             y = value(force, torque)
             ax.plot(rho, y, color=colour, linewidth=0.5, alpha=0.3)
@@ -162,10 +233,24 @@ def plot(lines, frame, window, title, out_path, force_only=False):
         ax.set_xlabel("rho [mm]")
         ax.set_ylabel(ylabel)
         ax.grid(True, linewidth=0.3)
+        for name, at in marks:
+            if 0 < at <= rho_max:
+                ax.axvline(at, color="0.35", linestyle=":", linewidth=1.0)
+    # The segments' names above the top panels, at their starts.
+    top = [ax for ax, _, _ in panels[:1 if force_only else 2]]
+    for ax in top:
+        for name, at in marks:
+            if 0 <= at <= rho_max:
+                ax.text(at, 1.01, " " + name, transform=ax.get_xaxis_transform(), fontsize=7,
+                        rotation=0, va="bottom", ha="left", color="0.25")
     panels[0][0].legend(fontsize="small")
     default = ("Force magnitude on the scoop (raw and %d-sample moving average)" % window
                if force_only else
                "Wrench on the scoop, %s frame (raw and %d-sample moving average)" % (frame, window))
+    default += ("\nrho: the scoop CoM's horizontal travel along the trench since the pass's first "
+                "contact")
+    if marks:
+        default += "\ndotted: the trajectory's segments (of %s), named at their start" % lines[0][0]
     fig.suptitle(title or default)
     fig.savefig(out_path, dpi=110)
     plt.close(fig)
@@ -185,6 +270,8 @@ def main(argv=None):
     parser.add_argument("--labels", help="comma-separated legend labels, one per run "
                         "(default: file stems)")
     parser.add_argument("--title", help="figure title")
+    parser.add_argument("--rho-max", type=float, metavar="MM",
+                        help="end of the rho axis in mm (default: the data's largest rho)")
     parser.add_argument("--force-only", action="store_true",
                         help="draw |F| alone, one line per run (a shape study: per template)")
     args = parser.parse_args(argv)
@@ -192,6 +279,8 @@ def main(argv=None):
     try:
         if args.smooth < 1:
             raise InputError("--smooth: expected a window >= 1 sample, got %d" % args.smooth)
+        if args.rho_max is not None and not (np.isfinite(args.rho_max) and args.rho_max > 0):
+            raise InputError("--rho-max: expected a length > 0 in mm, got %s" % args.rho_max)
         window = args.smooth if args.smooth % 2 == 1 else args.smooth + 1
         named = [lr for p in args.runs for lr in read_runs(p, args.frame)]
         labels = [label for label, _ in named]
@@ -206,11 +295,14 @@ def main(argv=None):
                              % (args.pass_, ", ".join(args.runs)))
         out_dir = os.path.dirname(os.path.abspath(args.output))
         os.makedirs(out_dir, exist_ok=True)
-        plot(lines, args.frame, window, args.title, args.output, args.force_only)
+        plot(lines, args.frame, window, args.title, args.output, args.force_only, args.rho_max)
     except InputError as e:
         print("plot_wrench: %s" % e, file=sys.stderr)
         return 2
-    print("plot_wrench: wrote %s (%d lines, %s frame)" % (args.output, len(lines), args.frame))
+    marks = lines[0][4]
+    print("plot_wrench: wrote %s (%d lines, %s frame; segments: %s)" % (
+        args.output, len(lines), args.frame,
+        ", ".join("%s at rho %.0f mm" % m for m in marks) if marks else "none"))
     return 0
 
 

@@ -1,7 +1,8 @@
 // `scoopsim study shape` end to end (sim/runner.cpp RunShapeStudy) on a tiny scene: a 2 cm box
 // pushed 15 mm through a sparse layer of clumps, once per built-in template. The file holds one
 // group per template with the dig's /scoop rows and the table of spheres, clumps, wall time and
-// force; stderr ends with the table.
+// force; stderr ends with the table. `scoopsim study balovnev` end to end on the same box pushed
+// through a shallow bed of spheres.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
@@ -14,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/balovnev.h"
 #include "tests/cli_util.h"
 
 namespace {
@@ -43,21 +45,18 @@ void WriteBoxStl(const fs::path& path, double h, double t) {
 
 constexpr double kMaxOverlap = 0.15;  // WriteScene's health.max_overlap
 
-std::string WriteScene(int count = 60, const std::string& name = "tiny_shape.yaml") {
+// A scene of the 2 cm box tool (tool.stl) buried at the start and pushed 15 mm at 0.3 m/s along
+// x: the box is 0.06 x 0.05 x box_z m, `bed` the bed block's keys, `dig` more keys of the dig
+// block, `tail` more top-level keys.
+std::string WriteToolScene(const std::string& name, double box_z, const std::string& bed,
+                           const std::string& dig, const std::string& tail) {
   WriteBoxStl(TempDir() / "tool.stl", 0.01, 0.002);
   const fs::path path = TempDir() / name;
   std::ofstream(path) << "materials: " << SCOOPSIM_SOURCE_DIR << "/scenes/materials.yaml\n"
-                      << R"(gravity: [0, 0, -9.81]
-time_step: {rayleigh_fraction: 0.3}
-box: {min: [0, 0, 0], max: [0.06, 0.05, 0.05], wall_material: wall}
-bed:
-  material: ice
-  clump: tetra4
-  count: )" << count << R"(
-  seed: 4
-  fill_fraction: 0.3
-  settle: {kinetic_energy: 1.0, max_time: 0.5}
-dig:
+                      << "gravity: [0, 0, -9.81]\ntime_step: {rayleigh_fraction: 0.3}\n"
+                      << "box: {min: [0, 0, 0], max: [0.06, 0.05, " << box_z
+                      << "], wall_material: wall}\nbed:\n"
+                      << bed << R"(dig:
   scoop: {mesh: tool.stl, material: aluminium, cavity: {min: [-0.001, -0.001, -0.001], max: [0.001, 0.001, 0.001]}}
   trajectory:
     preset: none
@@ -65,14 +64,23 @@ dig:
     initial_pitch: 0
     linear: {start: 0, speed: 0.3, distance: 0.015}
   passes: 1
-  bite_depth: 0.004
-  surface: 0.006                 # the layers are one clump deep: the tool spans z 2..6 mm
   start_buried: true
   interval: 1.0e-3
-health: {max_overlap: 0.15}
-sleep: {enabled: true}
-)";
+)" << dig << "sleep: {enabled: true}\n"
+                      << tail;
   return path.string();
+}
+
+// A sparse layer of `count` ice clumps, the tool spanning it.
+std::string WriteScene(int count = 60, const std::string& name = "tiny_shape.yaml") {
+  return WriteToolScene(
+      name, 0.05,
+      "  material: ice\n  clump: tetra4\n  count: " + std::to_string(count) +
+          "\n  seed: 4\n  fill_fraction: 0.3\n"
+          "  settle: {kinetic_energy: 1.0, max_time: 0.5}\n",
+      "  bite_depth: 0.004\n"
+      "  surface: 0.006   # the layers are one clump deep: the tool spans z 2..6 mm\n",
+      "health: {max_overlap: 0.15}\n");
 }
 
 std::vector<double> ReadDoubles(hid_t file, const std::string& name, hsize_t* rows,
@@ -168,11 +176,11 @@ TEST(ShapeStudyTest, CachedBedIsReusedOnlyForTheSameScene) {
   auto study = [&](const std::string& scene, const std::string& tag, std::string* text) {
     const std::string out = (TempDir() / ("cache_" + tag + ".h5")).string();
     const std::string log = (TempDir() / ("cache_" + tag + ".log")).string();
-    EXPECT_EQ(scoopsim_test::RunScoopsim("study shape " + scene + " -o " + out +
-                                             " --templates tetra1 --threads 1 -q --beds " +
-                                             beds.string(),
-                                         log),
-              0);
+    EXPECT_EQ(
+        scoopsim_test::RunScoopsim("study shape " + scene + " -o " + out +
+                                       " --templates tetra1 --threads 1 -q --beds " + beds.string(),
+                                   log),
+        0);
     std::stringstream s;
     s << std::ifstream(log).rdbuf();
     *text = s.str();
@@ -194,8 +202,7 @@ TEST(ShapeStudyTest, CachedBedIsReusedOnlyForTheSameScene) {
   EXPECT_EQ(second.find("making it again"), std::string::npos) << second;
   // Another count: the cached bed is not this scene's, so the bed is made again and is larger.
   EXPECT_GT(study(WriteScene(70, "cache_b.yaml"), "third", &third), made);
-  EXPECT_NE(third.find("tetra1.h5 was made from another scene; making it again"),
-            std::string::npos)
+  EXPECT_NE(third.find("tetra1.h5 was made from another scene; making it again"), std::string::npos)
       << third;
 }
 
@@ -213,6 +220,111 @@ TEST(ShapeStudyTest, UnknownTemplateIsBadInput) {
                             "got tetra7"),
             std::string::npos)
       << text.str();
+}
+
+// The tool pushed with its bottom 12 mm under the surface through ~500 sand spheres of 2.5 mm (a
+// bed ~24 mm deep: deep enough for the solid fraction's box, 6 radii).
+std::string WriteSphereScene() {
+  return WriteToolScene(
+      "tiny_balovnev.yaml", 0.08,
+      "  material: sand\n  radius: 2.5e-3\n  count: 500\n  seed: 4\n"
+      "  fill_fraction: 0.45\n  settle: {kinetic_energy: 1.0e-6, max_time: 0.3}\n",
+      "  bite_depth: 0.012\n", "");
+}
+
+// The study's CSV against its oracles: one row per /scoop/ row; the blade tip is the box's +x
+// face centre (h, 0, 0) carried by the pose (level: l_scoop x -> world x), so tip = position +
+// (h, 0, 0) to 1e-12 m, h as the STL stores it (a float: 0.01f); depth = max(0, surface - tip_z)
+// (1e-12 m); the DEM's horizontal and downward forces are -F_world.x and -F_world.z of the run
+// file, exactly (the CSV writes 17 digits); Balovnev's columns are sim::Balovnev at the row's depth
+// with the soil the CSV's header states (gamma = rho_bulk g; relative 1e-12). The table is printed,
+// the PNG drawn.
+TEST(BalovnevStudyTest, CsvMatchesTheRunAndTheModel) {
+  const std::string scene = WriteSphereScene();
+  const std::string out = (TempDir() / "balovnev.h5").string();
+  const std::string table = (TempDir() / "balovnev.txt").string();
+  const std::string log = (TempDir() / "balovnev.log").string();
+  ASSERT_EQ(scoopsim_test::RunScoopsim(
+                "study balovnev " + scene + " -o " + out + " --threads 1 -q > " + table, log),
+            0)
+      << scoopsim_test::ReadText(log);
+  const std::string printed = scoopsim_test::ReadText(table);
+  EXPECT_NE(printed.find("| t [s] | rho [mm] | depth [mm] | DEM F_h [N] |"), std::string::npos)
+      << printed;
+  EXPECT_NE(printed.find("| mean, rows cut |"), std::string::npos) << printed;
+  EXPECT_TRUE(fs::exists(TempDir() / "balovnev.balovnev.png"));
+
+  const hid_t file = H5Fopen(out.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  hsize_t rows = 0, width = 0;
+  const std::vector<double> force = ReadDoubles(file, "/scoop/force_world", &rows, &width);
+  const std::vector<double> pose = ReadDoubles(file, "/scoop/pose", &rows, &width);
+  H5Fclose(file);
+  ASSERT_GE(rows, 40u);  // 0.05 s at 1 ms
+
+  std::ifstream csv(TempDir() / "balovnev.balovnev.csv");
+  std::string line;
+  double gamma = 0;
+  std::vector<std::vector<double>> data;
+  while (std::getline(csv, line)) {
+    if (line.rfind("# rho_bulk", 0) == 0) {
+      const size_t at = line.find("gamma ");
+      ASSERT_NE(at, std::string::npos) << line;
+      gamma = std::stod(line.substr(at + 6));
+      continue;
+    }
+    if (line.empty() || line[0] == '#' || line.rfind("time,", 0) == 0) continue;
+    std::vector<double> v;
+    std::stringstream fields(line);
+    for (std::string field; std::getline(fields, field, ',');) v.push_back(std::stod(field));
+    ASSERT_EQ(v.size(), 14u) << line;
+    data.push_back(v);
+  }
+  ASSERT_EQ(data.size(), rows);
+  ASSERT_GT(gamma, 0.3 * 2650 * 9.81);  // a solid fraction in (0.3, 0.7): a loose bed
+  ASSERT_LT(gamma, 0.7 * 2650 * 9.81);
+  sim::BalovnevSoil soil;
+  soil.unit_weight = gamma;
+  int cut = 0;
+  for (size_t r = 0; r < rows; ++r) {
+    SCOPED_TRACE(r);
+    const std::vector<double>& v = data[r];
+    EXPECT_NEAR(v[3], pose[7 * r] + static_cast<double>(0.01f), 1e-12);
+    EXPECT_NEAR(v[5], pose[7 * r + 2], 1e-12);
+    EXPECT_NEAR(v[7], std::max(0.0, v[6] - v[5]), 1e-12);
+    EXPECT_EQ(v[8], -force[3 * r]);
+    EXPECT_EQ(v[9], -force[3 * r + 2]);
+    const sim::BalovnevTool tool;
+    const sim::BalovnevForce split =
+        sim::Balovnev(v[7], tool, soil, false, sim::BalovnevBranch::kSplit);
+    const sim::BalovnevForce plugin =
+        sim::Balovnev(v[7], tool, soil, false, sim::BalovnevBranch::kPlugin);
+    EXPECT_NEAR(v[10], split.horizontal, 1e-12 * split.horizontal);
+    EXPECT_NEAR(v[11], split.vertical, 1e-12 * split.vertical);
+    EXPECT_NEAR(v[12], plugin.horizontal, 1e-12 * plugin.horizontal);
+    EXPECT_NEAR(v[13], plugin.vertical, 1e-12 * plugin.vertical);
+    if (v[7] > 0) ++cut;
+  }
+  // The tip, 10 mm under the mean surface, lies under the local one (grains of 5 mm) on most rows.
+  EXPECT_GT(cut, static_cast<int>(rows) / 2);
+}
+
+// Bad input: delta above phi (Balovnev's psi is undefined there) is one line, exit 2, before any
+// work.
+TEST(BalovnevStudyTest, DeltaAbovePhiIsBadInput) {
+  const std::string scene = WriteSphereScene();
+  const std::string log = (TempDir() / "balovnev_bad.log").string();
+  EXPECT_EQ(scoopsim_test::RunScoopsim("study balovnev " + scene + " -o " +
+                                           (TempDir() / "bad.h5").string() +
+                                           " --phi-deg 30 --delta-deg 35 -q",
+                                       log),
+            2);
+  const std::string text = scoopsim_test::ReadText(log);
+  EXPECT_NE(text.find("study balovnev: --delta-deg: expected a value in [0, --phi-deg], got 35"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+  EXPECT_FALSE(fs::exists(TempDir() / "bad.h5"));
 }
 
 }  // namespace

@@ -109,6 +109,37 @@ TEST(DigTest, BedSurfaceOfLattice) {
   EXPECT_DOUBLE_EQ(BedSurface(p, {0, 0, 0}, {0.08, 0.04, 0.1}, 0.008), 0.05);
 }
 
+// The surface as a height field and the solid fraction, on a simple-cubic lattice (spacing 2r,
+// 20 x 10 columns, 5 layers) whose column (7, 4) stands one sphere taller (top 0.05 + 2r):
+// columns of side 2r hold one column of spheres each, so top = 0.05 (0.054 in the tall one);
+// Height at a point is the mean of the 3 x 3 columns around it: 0.05 + 2r/9 next to the tall one,
+// 0.05 elsewhere, exactly 0.05 at a corner (4 columns clamped); NaN over an empty region. The
+// solid fraction of a simple-cubic lattice is pi/6 (any whole number of cells; 1e-12).
+TEST(DigTest, SurfaceMapAndSolidFractionOfLattice) {
+  dem::Particles p;
+  const double r = 0.002;
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 10; ++j)
+      for (int l = (i == 7 && j == 4) ? -1 : 0; l < 5; ++l) {
+        p.id.push_back(static_cast<int64_t>(p.id.size()));
+        p.x.push_back({(i + 0.5) * 2 * r, (j + 0.5) * 2 * r, 0.05 - r - l * 2 * r});
+        p.radius.push_back(r);
+      }
+  const SurfaceMap m = MeasureSurfaceMap(p, {0, 0, 0}, {0.08, 0.04, 0.1}, 2 * r);
+  ASSERT_EQ(m.nx, 20);
+  ASSERT_EQ(m.ny, 10);
+  EXPECT_DOUBLE_EQ(m.top[4 * 20 + 7], 0.05 + 2 * r);
+  EXPECT_DOUBLE_EQ(m.top[0], 0.05);
+  EXPECT_NEAR(m.Height(8.5 * 2 * r, 4.5 * 2 * r), 0.05 + 2 * r / 9, 1e-15);
+  EXPECT_NEAR(m.Height(15.5 * 2 * r, 4.5 * 2 * r), 0.05, 1e-15);
+  EXPECT_NEAR(m.Height(-1.0, -1.0), 0.05, 1e-15);
+  const SurfaceMap empty = MeasureSurfaceMap(p, {1, 1, 0}, {1.1, 1.1, 0.1}, 2 * r);
+  EXPECT_TRUE(std::isnan(empty.Height(1.05, 1.05)));
+  // Cells of the lattice's two bottom layers, 10 x 5 columns: pi/6.
+  EXPECT_NEAR(SolidFraction(p, {0, 0, 0.05 - 10 * r}, {20 * r, 10 * r, 0.05 - 6 * r}), M_PI / 6,
+              1e-12);
+}
+
 // A buried start removes exactly the particles closer to a triangle than their radius: one at
 // 0.9 r above a floor triangle goes, one at 1.1 r stays (distance to a plane, closed form).
 TEST(DigTest, ParticlesTouchingMeshByDistance) {

@@ -34,6 +34,34 @@ def make_run(path, passes=2, n=400, drop=None, seed=0):
                 f["scoop/" + name] = value
 
 
+def make_table1_run(path):
+    """One pass along a Table 1-like path in its poses: a rotation (pitch 90 -> 0 deg about the
+    l_scoop origin), a horizontal push of 0.05 m, a rotation back (0 -> -90 deg); rho is the
+    running travel from the push's start (first contact there), 1 mm at the first rotation's end
+    (as the CoM moves while turning)."""
+    n_rot, n_push = 60, 100
+    theta = np.concatenate([np.linspace(np.pi / 2, 0, n_rot), np.zeros(n_push),
+                            np.linspace(0, -np.pi / 2, n_rot)])
+    x = np.concatenate([np.zeros(n_rot), np.linspace(0, 0.05, n_push), np.full(n_rot, 0.05)])
+    rho = np.concatenate([np.linspace(0, 0.001, n_rot), 0.001 + np.linspace(0, 0.05, n_push),
+                          0.051 + np.linspace(0, 0.02, n_rot)])
+    # Level orientation rpy(pi, 0, 0) pitched about world y by theta: q = q_y(theta) q_x(pi).
+    c, s_ = np.cos(theta / 2), np.sin(theta / 2)
+    quat = np.stack([np.zeros_like(c), c, np.zeros_like(c), -s_], axis=1)  # w x y z
+    pose = np.concatenate([np.stack([x, np.zeros_like(x), np.full_like(x, 0.1)], axis=1), quat],
+                          axis=1)
+    n = rho.size
+    wrench = np.zeros((n, 3))
+    with h5py.File(path, "w") as f:
+        f["scoop/time"] = np.arange(n) * 1e-3
+        f["scoop/pass"] = np.ones(n)
+        f["scoop/rho"] = rho
+        f["scoop/pose"] = pose
+        for frame in ("body", "scoop", "world"):
+            f["scoop/force_" + frame] = wrench
+            f["scoop/torque_" + frame] = wrench
+
+
 def make_study(path, drop_group=None):
     """A shape-study file shaped like scoopsim's: one group per template with a run's /scoop."""
     templates = ["tetra1", "tetra4", "tetra8", "tetra12"]
@@ -77,6 +105,17 @@ def main():
         png = os.path.join(d, "sub", "raw.png")
         check_png(run([b, "-o", png, "--smooth", "1"]), png, "no smoothing, new folder")
 
+        # The trajectory's segments, from the poses; rho's axis ends at the data's (71 mm).
+        path1 = os.path.join(d, "table1.h5")
+        make_table1_run(path1)
+        png = os.path.join(d, "segments.png")
+        result = run([path1, "-o", png])
+        check_png(result, png, "segments")
+        assert ("segments: rotation 1 at rho 0 mm, push at rho 1 mm, rotation 2 at rho 51 mm"
+                in result.stdout), result.stdout
+        png = os.path.join(d, "paper_axis.png")
+        check_png(run([path1, "-o", png, "--rho-max", "450"]), png, "rho axis to 450 mm")
+
         # A shape study: four runs from one file, |F| alone or the full layout.
         study = os.path.join(d, "study.h5")
         make_study(study)
@@ -100,9 +139,12 @@ def main():
                               "--labels"),
                              ([broken_study, "-o", os.path.join(d, "x.png")], "no group /tetra8"),
                              ([study, "-o", os.path.join(d, "x.png"), "--labels", "a,b"],
-                              "expected 4 labels")))
+                              "expected 4 labels"),
+                             ([a, "-o", os.path.join(d, "x.png"), "--rho-max", "-1"],
+                              "--rho-max")))
         assert not os.path.exists(os.path.join(d, "x.png"))
-    print("plot_wrench_test: 6 plots written, 6 bad inputs refused with exit 2")
+    print("plot_wrench_test: 8 plots written (segments found from the poses), 7 bad inputs "
+          "refused with exit 2")
     return 0
 
 

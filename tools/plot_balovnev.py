@@ -1,0 +1,107 @@
+#!/usr/bin/python3
+"""Plots a dig against Balovnev's model: the CSV of `scoopsim study balovnev` -> one PNG.
+
+    tools/plot_balovnev.py OUT.balovnev.csv -o OUT.balovnev.png [--smooth 25]
+
+Three panels against the time since the dig began: the horizontal force against the motion, the
+vertical force (downward on the scoop, Balovnev's sense), the DEM's raw (light) and its moving
+mean over --smooth rows (dark), Balovnev with A split at x* (FACTS.md section 7) and with the
+lander plugin's A_II everywhere (dashed); and the blade tip's depth below the bed's surface before
+the dig (the depth the model is evaluated at). The '#' lines of the CSV (rho_bulk, g, gamma, q,
+phi, delta, beta) go under the title. Exit 2 with one line on stderr for a missing or malformed
+CSV. Needs python3-numpy and python3-matplotlib.
+"""
+import argparse
+import re
+import sys
+
+import numpy as np
+
+COLUMNS = ("time", "pass", "rho", "tip_x", "tip_y", "tip_z", "surface", "depth", "dem_horizontal",
+           "dem_down", "balovnev_horizontal", "balovnev_vertical", "plugin_horizontal",
+           "plugin_vertical")
+
+
+def read(path):
+    try:
+        with open(path) as f:
+            lines = f.read().splitlines()
+    except OSError as e:
+        raise ValueError("%s: cannot read: %s" % (path, e.strerror))
+    # The CSV keeps every digit; the figure's notes four significant ones.
+    short = lambda m: "%.4g" % float(m.group())
+    notes = [re.sub(r"\d+\.\d{5,}(e[-+]?\d+)?", short, l[1:].strip()) for l in lines
+             if l.startswith("#")]
+    body = [l for l in lines if l and not l.startswith("#")]
+    if not body or tuple(body[0].split(",")) != COLUMNS:
+        raise ValueError("%s: expected the header %s" % (path, ",".join(COLUMNS)))
+    try:
+        data = np.array([[float(v) for v in l.split(",")] for l in body[1:]], dtype=float)
+    except ValueError:
+        raise ValueError("%s: expected numbers in every row" % path)
+    if data.ndim != 2 or data.shape[0] < 2 or data.shape[1] != len(COLUMNS):
+        raise ValueError("%s: expected at least two rows of %d columns" % (path, len(COLUMNS)))
+    return {c: data[:, k] for k, c in enumerate(COLUMNS)}, notes
+
+
+def smooth(y, n):
+    """Centred moving mean over n rows (shorter at the ends)."""
+    if n <= 1 or len(y) < 2:
+        return y
+    kernel = np.ones(n)
+    return np.convolve(y, kernel, "same") / np.convolve(np.ones_like(y), kernel, "same")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("csv")
+    ap.add_argument("-o", "--output", required=True)
+    ap.add_argument("--smooth", type=int, default=25, help="rows in the moving mean (default 25)")
+    args = ap.parse_args()
+    try:
+        d, notes = read(args.csv)
+        if args.smooth < 1:
+            raise ValueError("--smooth: expected >= 1, got %d" % args.smooth)
+    except ValueError as e:
+        print("plot_balovnev: %s" % e, file=sys.stderr)
+        return 2
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = d["time"] - d["time"][0]
+    fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True,
+                             gridspec_kw={"height_ratios": [3, 3, 1.6]})
+    for ax, dem, bal, plug, what in (
+            (axes[0], "dem_horizontal", "balovnev_horizontal", "plugin_horizontal",
+             "horizontal force\nagainst the motion [N]"),
+            (axes[1], "dem_down", "balovnev_vertical", "plugin_vertical",
+             "vertical force\ndownward on the scoop [N]")):
+        ax.plot(t, d[dem], color="tab:blue", alpha=0.25, lw=0.8, label="DEM, raw")
+        ax.plot(t, smooth(d[dem], args.smooth), color="tab:blue", lw=1.8,
+                label="DEM, mean of %d rows" % args.smooth)
+        ax.plot(t, d[bal], color="tab:red", lw=1.8, label="Balovnev (A split at x*)")
+        ax.plot(t, d[plug], color="tab:red", lw=1.2, ls="--", label="Balovnev, plugin's A")
+        ax.axhline(0, color="0.6", lw=0.6)
+        ax.set_ylabel(what)
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="best", fontsize=8)
+    axes[2].plot(t, 1e3 * d["depth"], color="k")
+    axes[2].set_ylabel("blade tip depth\nbelow surface [mm]")
+    axes[2].set_xlabel("time since the dig began [s]")
+    axes[2].grid(alpha=0.3)
+    title = "DEM against Balovnev's model along the same dig"
+    if notes:
+        title += "\n" + notes[0]
+    fig.suptitle(title, fontsize=10)
+    caption = "\n".join(notes[1:2])
+    if caption:
+        fig.text(0.01, 0.005, caption, fontsize=7, va="bottom", wrap=True)
+    fig.tight_layout(rect=(0, 0.04, 1, 1))
+    fig.savefig(args.output, dpi=110)
+    print("plot_balovnev: wrote %s" % args.output, file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
