@@ -7,6 +7,7 @@
 # Beds: BED=own (default) pours each law's own bed, as a user's run would; BED=shared pours one
 # bed under the default law (`scoopsim bed`) and digs it under each law, so that only the dig's
 # contacts differ.
+# LAWS (default all four, as above) picks some: LAWS=edem/standard.
 # Appends a row per run to bench/results/$MACHINE/contact_law_digs.csv; prints the dig lines.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -29,7 +30,7 @@ case "$materials" in /*) ;; *) materials="$dir/$materials" ;; esac
 if [ "$BED" = shared ]; then
   "$ROOT/build/scoopsim" bed "$scene" -o "$work/bed.h5" --threads "$threads" -q
 fi
-for law in edem/standard cdt/standard legacy/standard legacy/exact_restitution; do
+for law in ${LAWS:-edem/standard cdt/standard legacy/standard legacy/exact_restitution}; do
   model=${law%/*}
   damping=${law#*/}
   { echo "contact_law: {rolling_model: $model, damping: $damping}"; cat "$materials"; } \
