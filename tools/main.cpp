@@ -11,6 +11,8 @@
 // Exit status: sim/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
 // not settled, 130 stopped by a signal).
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -70,6 +72,7 @@ struct SceneCommand {
   std::string output;
   int threads = 0;
   bool quiet = false;
+  bool fixed_threads = false;
   CLI::Option* threads_option = nullptr;
   CLI::Option* scene_option = nullptr;
   CLI::Option* output_option = nullptr;
@@ -88,6 +91,10 @@ struct SceneCommand {
                          "Worker threads; 0 = all cores (default: the scene's `threads`, else 0)")
             ->check(CLI::Range(0, kMaxThreads));
     command->add_flag("-q,--quiet", quiet, "No progress output");
+    command->add_flag("--fixed-threads", fixed_threads,
+                      "Use exactly --threads workers every step (default: fewer while timing "
+                      "shows fewer faster, as when another process holds a core; results are "
+                      "the same)");
   }
 
   // The scene, and run options where the command line overrides the scene.
@@ -96,6 +103,7 @@ struct SceneCommand {
     options.threads = threads_option->count() > 0 ? threads : loaded.threads;
     options.output = output;
     options.quiet = quiet;
+    options.adaptive_threads = !fixed_threads;
     return options;
   }
 };
