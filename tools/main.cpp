@@ -450,18 +450,4 @@ int Main(int argc, char** argv) {
 
 }  // namespace
 
-// Waiting OpenMP threads sleep unless the user chose otherwise (OMP_WAIT_POLICY or
-// GOMP_SPINCOUNT): on a machine that other work shares, spinning barriers wait for a descheduled
-// thread and a 2-thread dig ran 6x slower than with sleeping ones (bench/busy_core.sh,
-// ARCHITECTURE.md "A busy core"). The runtime reads its settings when it loads, before main, so
-// the program starts itself again once with the setting in its environment.
-void SleepingThreadsByDefault(char** argv) {
-  if (std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr) return;
-  ::setenv("OMP_WAIT_POLICY", "passive", 1);
-  ::execv("/proc/self/exe", argv);  // returns only on failure: go on with the runtime's default
-}
-
-int main(int argc, char** argv) {
-  SleepingThreadsByDefault(argv);
-  return Main(argc, argv);
-}
+int main(int argc, char** argv) { return Main(argc, argv); }
