@@ -36,11 +36,11 @@ void ThreadGovernor::StartProbe() {
   count_[0] = count_[1] = 0;
 }
 
-void ThreadGovernor::EndProbe() {
+void ThreadGovernor::EndProbe(bool gave_up) {
   probing_ = false;
   ++probes_;
   const int other = window_threads_[1];
-  const bool measured = count_[0] > 0 && count_[1] > 0;
+  const bool measured = !gave_up && count_[0] > 0 && count_[1] > 0;
   // Mean plain step at each count (cross-multiplied: no division by a zero count).
   if (measured && sum_[1] * static_cast<double>(count_[0]) <
                       config_.switch_below * sum_[0] * static_cast<double>(count_[1])) {
@@ -69,14 +69,22 @@ void ThreadGovernor::Record(double seconds, bool rebuilt) {
   }
   ++steps_in_window_;
   window_elapsed_ += seconds;
+  // A neighbour far slower: no need to see more of it.
+  if (window_ == 1 && window_elapsed_ > config_.give_up_above * first_elapsed_) {
+    EndProbe(true);
+    return;
+  }
   // The first window sets the length of the others in steps.
   const bool done =
       window_ == 0 ? window_elapsed_ >= config_.window : steps_in_window_ >= window_steps_;
   if (!done) return;
-  if (window_ == 0) window_steps_ = steps_in_window_;
+  if (window_ == 0) {
+    window_steps_ = steps_in_window_;
+    first_elapsed_ = window_elapsed_;
+  }
   steps_in_window_ = 0;
   window_elapsed_ = 0;
-  if (++window_ == 4) EndProbe();
+  if (++window_ == 4) EndProbe(false);
 }
 
 }  // namespace dem

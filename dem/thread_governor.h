@@ -23,6 +23,10 @@ struct GovernorConfig {
   // The neighbour count is taken only when its mean step is faster than this fraction of the
   // current count's (hysteresis against noise).
   double switch_below = 0.97;
+  // A probe ends early, keeping the current count, once the neighbour's first window has taken
+  // this many times the current count's: a count 20x slower (spinning threads on a loaded host)
+  // then costs a probe at most this much.
+  double give_up_above = 1.5;
 };
 
 class ThreadGovernor {
@@ -45,7 +49,7 @@ class ThreadGovernor {
 
  private:
   void StartProbe();
-  void EndProbe();
+  void EndProbe(bool gave_up);  // gave_up: the neighbour was far slower
 
   GovernorConfig config_;
   int configured_;
@@ -59,6 +63,7 @@ class ThreadGovernor {
   int64_t window_steps_ = 0;     // steps of each window (set by the first)
   int64_t steps_in_window_ = 0;  // steps so far in this window
   double window_elapsed_ = 0;    // wall time so far in this window [s]
+  double first_elapsed_ = 0;     // wall time of the first window [s]
   double sum_[2] = {0, 0};       // plain steps' time at (current, other) [s]
   int64_t count_[2] = {0, 0};    // plain steps at (current, other)
   bool probe_down_ = true;       // direction of the next probe when both are possible

@@ -34,6 +34,23 @@ TEST(ThreadGovernorTest, ABusyCoreMovesToOneThread) {
   EXPECT_GT(g.steps_fewer(), 0.98 * g.steps());
 }
 
+// Spinning threads on a loaded host: two threads 20x slower. Back on one thread, each probe of
+// two gives up once its window has taken 1.5x the one-thread window (20 ms): over 60 s, under
+// 1% of the time goes to probing.
+TEST(ThreadGovernorTest, AProbeOfAFarSlowerCountEndsEarly) {
+  ThreadGovernor g(2);
+  double at_two = 0;
+  for (double t = 0; t < 60.0;) {
+    const double s = g.threads() == 2 ? 20e-3 : 1e-3;
+    if (g.threads() == 2) at_two += s;
+    g.Record(s, false);
+    t += s;
+  }
+  EXPECT_EQ(g.current(), 1);
+  EXPECT_LT(at_two, 0.01 * 60.0);
+  EXPECT_GE(g.probes(), 5);
+}
+
 // A quiet machine: two threads twice as fast; the count stays, and the probes thin out (the
 // interval doubles from 2 s to 60 s): 7 probes in 120 s.
 TEST(ThreadGovernorTest, AQuietMachineKeepsTheConfiguredCount) {
@@ -99,6 +116,7 @@ TEST(ThreadGovernorTest, CountChangingEveryFewStepsKeepsTheHash) {
       gc.window = 0;
       gc.first_interval = gc.interval = gc.max_interval = 0;
       gc.switch_below = 1e9;  // always
+      gc.give_up_above = 1e9;
       s.set_adaptive_threads(true, gc);
     }
     Rng rng(13);
