@@ -82,6 +82,13 @@ void ThreadGovernor::Record(double seconds, bool rebuilt) {
     window_steps_ = steps_in_window_;
     first_elapsed_ = window_elapsed_;
   }
+  // A neighbour far faster (the current count waits on a descheduled thread): take it now.
+  if (window_ == 1 && count_[0] > 0 && count_[1] > 0 &&
+      config_.give_up_above * sum_[1] * static_cast<double>(count_[0]) <
+          sum_[0] * static_cast<double>(count_[1])) {
+    EndProbe(false);
+    return;
+  }
   steps_in_window_ = 0;
   window_elapsed_ = 0;
   if (++window_ == 4) EndProbe(false);

@@ -25,7 +25,8 @@ struct GovernorConfig {
   double switch_below = 0.97;
   // A probe ends early, keeping the current count, once the neighbour's first window has taken
   // this many times the current count's: a count 20x slower (spinning threads on a loaded host)
-  // then costs a probe at most this much.
+  // then costs a probe at most this much. Likewise a neighbour this many times faster is taken
+  // after its first window.
   double give_up_above = 1.5;
 };
 
