@@ -178,9 +178,19 @@ void System::SetContacts(const std::vector<ContactRecord>& contacts) {
   ws_->stale.rebuild = true;
 }
 
-void System::Rebuild() {
-  internal::Rebuild(*ws_, p_, clumps_, config_, next_id_, num_threads_);
+void System::Rebuild(int nt) {
+  internal::Rebuild(*ws_, p_, clumps_, config_, next_id_, nt);
   ++builds_;
+}
+
+void System::set_num_threads(int n) {
+  num_threads_ = n;
+  if (governor_) governor_ = std::make_unique<ThreadGovernor>(n, governor_config_);
+}
+
+void System::set_adaptive_threads(bool on, const GovernorConfig& config) {
+  governor_config_ = config;
+  governor_ = on ? std::make_unique<ThreadGovernor>(num_threads_, config) : nullptr;
 }
 
 // One step of velocity Verlet (LIGGGHTS fix nve/sphere; Allen & Tildesley eq. 3.19): half kick
@@ -192,47 +202,49 @@ StepStatus System::Step() {
   const double dt = config_.time_step;
   const bool sleeping = config_.sleep.enabled;
   const bool have_clumps = !clumps_.empty();
+  // This step's worker count: the governor's with adaptive threads (results do not depend on it).
+  const int nt = governor_ ? governor_->threads() : num_threads_;
   double t_phase = internal::Now();
+  const double t_step = t_phase;
   auto lap = [&t_phase](double& phase) {  // adds the time since the last lap to `phase`
     const double now = internal::Now();
     phase += now - t_phase;
     t_phase = now;
   };
   // First half kick and drift (with sleeping, of the awake particles only).
-  if (sleeping && m.stale.active) internal::RefreshActive(m, p_, have_clumps, num_threads_);
+  if (sleeping && m.stale.active) internal::RefreshActive(m, p_, have_clumps, nt);
   lap(phase_times_.sleep);
-  double max_v2 = internal::KickDrift(m, p_, config_, num_threads_);
+  double max_v2 = internal::KickDrift(m, p_, config_, nt);
   if (have_clumps) {  // rigid clumps (dem/clump.h): move the bodies, place their spheres
-    const ClumpSet::BeginReport r = clumps_.BeginStep(p_, dt, num_threads_);
+    const ClumpSet::BeginReport r = clumps_.BeginStep(p_, dt, nt);
     max_v2 = std::max(max_v2, r.max_member_speed2);
     if (r.woke) {  // their pairs are listed: only the visiting lists change
       m.stale.busy = true;
       m.stale.active = true;
     }
   }
-  const bool rebuild =
-      internal::NeedsRebuild(m, p_, dt * std::sqrt(max_v2), sleeping, num_threads_);
+  const bool rebuild = internal::NeedsRebuild(m, p_, dt * std::sqrt(max_v2), sleeping, nt);
   lap(phase_times_.integrate);
   if (rebuild) {
-    Rebuild();
+    Rebuild(nt);
     lap(phase_times_.rebuild);
   }
 
   // Forces.
-  internal::ComputeForces(m, p_, config_, materials_.size(), num_threads_, &phase_times_,
+  internal::ComputeForces(m, p_, config_, materials_.size(), nt, &phase_times_,
                           &plane_force_);  // adds its own phases (near, pairs)
   t_phase = internal::Now();
   if (!m.meshes.empty()) {
-    internal::MeshForces(m, p_, dt, config_.mesh_rolling_torque, num_threads_);
+    internal::MeshForces(m, p_, dt, config_.mesh_rolling_torque, nt);
     lap(phase_times_.mesh);
   }
 
   // Second half kick (a mesh may have woken particles).
-  if (sleeping && m.stale.active) internal::RefreshActive(m, p_, have_clumps, num_threads_);
+  if (sleeping && m.stale.active) internal::RefreshActive(m, p_, have_clumps, nt);
   lap(phase_times_.sleep);
   max_v2 = 0;
-  bool finite = internal::Kick(m, p_, dt, sleeping, num_threads_, &max_v2);
-  if (have_clumps && !clumps_.EndStep(p_, config_.gravity, dt, num_threads_)) finite = false;
+  bool finite = internal::Kick(m, p_, dt, sleeping, nt, &max_v2);
+  if (have_clumps && !clumps_.EndStep(p_, config_.gravity, dt, nt)) finite = false;
   time_ += dt;
   ++step_count_;
   lap(phase_times_.integrate);
@@ -240,13 +252,14 @@ StepStatus System::Step() {
   // Sleep and wake checks.
   if (sleeping && ++m.sleep_counter >= config_.sleep.check_every) {
     m.sleep_counter = 0;
-    internal::UpdateSleep(m, p_, config_.sleep, num_threads_);
+    internal::UpdateSleep(m, p_, config_.sleep, nt);
     if (have_clumps && clumps_.SyncSleep(p_, config_.sleep.quiet_checks)) {
       m.stale.active = true;  // a clump sleeps as a unit
       m.stale.busy = true;
     }
     lap(phase_times_.sleep);
   }
+  if (governor_) governor_->Record(internal::Now() - t_step, rebuild);
   return internal::CheckHealth(m, p_, config_, time_, finite, max_v2);
 }
 

@@ -10,6 +10,7 @@
 #include "dem/clump.h"
 #include "dem/material.h"
 #include "dem/mesh.h"
+#include "dem/thread_governor.h"
 #include "dem/vec3.h"
 
 namespace dem {
@@ -227,12 +228,19 @@ class System {
   // (x, v, q, L) and of the time.
   uint64_t StateHash() const;
 
-  void set_num_threads(int n) { num_threads_ = n; }
+  // Worker threads (the most a step uses). With adaptive threads a ThreadGovernor picks each
+  // step's count, from 1 to num_threads(), by timing steps (dem/thread_governor.h): another
+  // process holding a core then costs a run little. Results are the same either way.
+  void set_num_threads(int n);
   int num_threads() const { return num_threads_; }
+  void set_adaptive_threads(bool on, const GovernorConfig& config = GovernorConfig());
+  const ThreadGovernor* governor() const { return governor_.get(); }  // null when fixed
 
  private:
-  // Reorders storage and rebuilds the lists (internal::Rebuild, dem/neighbor_build.cpp).
-  void Rebuild();
+  // Reorders storage and rebuilds the lists (internal::Rebuild, dem/neighbor_build.cpp) on nt
+  // threads.
+  void Rebuild(int nt);
+  void Rebuild() { Rebuild(num_threads_); }
   // Lists the mutable state to a dem/archive.h archive (SaveState, RestoreState).
   template <typename Archive>
   void StateFields(Archive& archive);
@@ -248,6 +256,8 @@ class System {
   int64_t next_id_ = 0;
   int64_t builds_ = 0;
   int num_threads_ = 1;
+  std::unique_ptr<ThreadGovernor> governor_;  // adaptive threads, else null
+  GovernorConfig governor_config_;
   // Everything else the step keeps between calls; its phases are plain functions over it
   // (dem/internal_phases.h).
   std::unique_ptr<internal::Workspace> ws_;

@@ -87,6 +87,7 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
   // The output's folder is made and checked for writing before any work.
   CheckWritable(options.output);
   World world(scene, options.threads);
+  world.mutable_system().set_adaptive_threads(options.adaptive_threads);
   world.KeepPour(PourPath(options.output));
   const auto wall0 = std::chrono::steady_clock::now();
   SettleReport r;
@@ -116,6 +117,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   }
   const std::string restart = CheckpointPath(options.output);
   World world(scene, options.threads);
+  world.mutable_system().set_adaptive_threads(options.adaptive_threads);
   auto driver = [&]() -> std::unique_ptr<ScoopDriver> {
     if (!scene.dig.enabled) return nullptr;
     // The scoop on the arm (Bullet, coupled every step) when the scene has an arm, else on its

@@ -26,6 +26,9 @@ struct RunOptions {
   DigSummary* dig_summary = nullptr;  // filled by a dig run when set
   double checkpoint_every = 0;        // keep OUT.restart.h5 every this many wall seconds (0: no)
   bool resume = false;                // go on from OUT.restart.h5 (sim/checkpoint.h)
+  // Each step's worker count picked by timing (dem::ThreadGovernor), up to `threads`; false:
+  // exactly `threads` every step. Results are the same either way.
+  bool adaptive_threads = false;
 };
 
 // Where a command that pours keeps the bed poured so far (World::KeepPour): OUT.h5 -> OUT.pour.h5.

@@ -630,6 +630,11 @@ RunResult World::Run(const RunControl& control) {
     Status("scoopsim: dig: %.1f s wall (%.3g x real time): %s\n", result.wall,
            summary_.simulated / std::max(result.wall, 1e-9),
            PhaseBreakdown(PhasesSince(system.phase_times(), phases0), result.wall).c_str());
+    if (const dem::ThreadGovernor* g = system.governor(); g != nullptr && g->configured() > 1) {
+      Status("scoopsim: threads: %d, fewer on %.1f%% of steps (%lld probes, %lld switches)\n",
+             g->configured(), 100.0 * g->steps_fewer() / std::max<int64_t>(1, g->steps()),
+             static_cast<long long>(g->probes()), static_cast<long long>(g->switches()));
+    }
     try {
       dig_->driver->Finish(out_ != nullptr && !out_->failed() ? out_ : nullptr);
     } catch (const std::exception& e) {

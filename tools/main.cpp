@@ -13,6 +13,8 @@
 // Exit status: sim/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
 // not settled, 130 stopped by a signal).
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -72,6 +74,7 @@ struct SceneCommand {
   std::string output;
   int threads = 0;
   bool quiet = false;
+  bool fixed_threads = false;
   CLI::Option* threads_option = nullptr;
   CLI::Option* scene_option = nullptr;
   CLI::Option* output_option = nullptr;
@@ -90,6 +93,10 @@ struct SceneCommand {
                          "Worker threads; 0 = all cores (default: the scene's `threads`, else 0)")
             ->check(CLI::Range(0, kMaxThreads));
     command->add_flag("-q,--quiet", quiet, "No progress output");
+    command->add_flag("--fixed-threads", fixed_threads,
+                      "Use exactly --threads workers every step (default: fewer while timing "
+                      "shows fewer faster, as when another process holds a core; results are "
+                      "the same)");
   }
 
   // The scene, and run options where the command line overrides the scene (a study's options
@@ -100,6 +107,7 @@ struct SceneCommand {
     options.threads = threads_option->count() > 0 ? threads : loaded.threads;
     options.output = output;
     options.quiet = quiet;
+    options.adaptive_threads = !fixed_threads;
     return options;
   }
   sim::RunOptions Options(const sim::Scene& loaded) const {
@@ -488,6 +496,24 @@ int Main(int argc, char** argv) {
   return kExitInput;  // unreachable: a subcommand is required
 }
 
+// Waiting OpenMP threads sleep unless the user chose otherwise (OMP_WAIT_POLICY or
+// GOMP_SPINCOUNT), as the scripts have them: on the shared host a 2-thread dig with spinning
+// threads ran 10x slower than one thread when one core was busy, with sleeping ones no slower
+// (bench/busy_core.sh, ARCHITECTURE.md "A busy core"). The runtime reads its settings when it
+// loads, before main, so the program starts itself again once with the setting in its
+// environment. `scoopsim bench` keeps the runtime's default (spinning), as the journal's rows
+// were measured.
+void SleepingThreadsByDefault(int argc, char** argv) {
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr)
+    return;
+  if (argc > 1 && std::string(argv[1]) == "bench") return;
+  ::setenv("OMP_WAIT_POLICY", "passive", 1);
+  ::execv("/proc/self/exe", argv);  // returns only on failure: go on with the runtime's default
+}
+
 }  // namespace
 
-int main(int argc, char** argv) { return Main(argc, argv); }
+int main(int argc, char** argv) {
+  SleepingThreadsByDefault(argc, argv);
+  return Main(argc, argv);
+}
