@@ -166,6 +166,10 @@ struct ArmSpec {
   std::vector<double> derate;                // effort-limit factor per joint, in (0, 1]
   int substeps = 1;                          // DEM steps per Bullet step (averaged wrench)
   CouplingTiming timing = CouplingTiming::kBulletFirst;
+  // The PID's D term (arm/controller.h): implicit (default, stable at any step) or explicit.
+  bool implicit_d = true;
+  // The table-driven arm's Bullet step [s] (arm.step); 0: substeps x time_step, as coupled.
+  double step = 0;
   double velocity_margin = 0.9;  // the path is slowed until every joint stays below this
                                  // fraction of its velocity limit
   // Fault rules (arm/fault_monitor.h) and the reaction to torque, position and F/T limits.

@@ -429,6 +429,10 @@ TEST(ArmDriverTest, BadArmBlockExitsTwoWithOneLine) {
   ExpectBadScene(f, "arm.gain: expected one of the keys");
   const std::string g = WriteArmScene("bad_reaction.yaml", "arm:\n  faults: {reaction: panic}\n");
   ExpectBadScene(g, "arm.faults.reaction: expected continue, stop or retract, got panic");
+  const std::string h = WriteArmScene("bad_d_term.yaml", "arm:\n  d_term: halfway\n");
+  ExpectBadScene(h, "arm.d_term: expected implicit or explicit, got halfway");
+  const std::string i = WriteArmScene("bad_step.yaml", "arm:\n  step: 2.5e-3\n");
+  ExpectBadScene(i, "arm.step: expected a step only with arm.wrench: table");
 }
 
 }  // namespace
