@@ -16,7 +16,7 @@
 // The D term, two ways (PidDTerm):
 // - explicit (Compute): qd is the measured rate at the step's start; stable for dt < 2 I / d, I
 //   the joint's effective inertia (about 1.2e-4 s for j_scoop_yaw, d = 10).
-// - implicit (ComputeServo, the default of the arm in the loop): the D term is taken at the
+// - implicit (ComputeServo, the default of the table-driven arm): the D term is taken at the
 //   step's end rate v, solved with the joint dynamics (arm::BulletArm's servo, bullet_arm.h):
 //     demanded(v) = bias - d v,   bias = p e + i integral + d qd_ref,
 //     applied = clamp(demanded(v), lower, upper),

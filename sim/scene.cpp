@@ -850,13 +850,6 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
     else
       Fail(file, LineOf(node["timing"]), "arm.timing", "bullet_first or dem_first", t);
   }
-  if (m.Has("d_term")) {
-    const std::string d = m.String("d_term", "implicit or explicit");
-    if (d == "implicit" || d == "explicit")
-      a.implicit_d = d == "implicit";
-    else
-      Fail(file, LineOf(node["d_term"]), "arm.d_term", "implicit or explicit", d);
-  }
   a.step = m.Number("step", 0.0, "a number > 0 (s)", Positive);
   a.velocity_margin = m.Number("velocity_margin", a.velocity_margin, "a number in (0, 1]",
                                [](double v) { return v > 0 && v <= 1; });
@@ -915,6 +908,16 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
   } else if (m.Has("table")) {
     Fail(file, LineOf(node["table"]), "arm.table", "a table only with arm.wrench: table",
          m.String("table", "a path"));
+  }
+  // The PID's D term: implicit on a table (the step it needs), explicit coupled to the DEM
+  // unless asked (journal section 13: the boulder's fault timeline moved with it).
+  a.implicit_d = a.table_driven;
+  if (m.Has("d_term")) {
+    const std::string d = m.String("d_term", "implicit or explicit");
+    if (d == "implicit" || d == "explicit")
+      a.implicit_d = d == "implicit";
+    else
+      Fail(file, LineOf(node["d_term"]), "arm.d_term", "implicit or explicit", d);
   }
   if (m.Has("step") && !a.table_driven)
     Fail(file, LineOf(node["step"]), "arm.step",
