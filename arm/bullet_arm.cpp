@@ -57,18 +57,28 @@ struct BulletArm::Impl {
   std::vector<std::unique_ptr<btBoxShape>> shapes;
   std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
   // Scratch for Bullet's dynamics routines (sized once).
-  btAlignedObjectArray<btScalar> scratch_r, scratch_r2;
-  btAlignedObjectArray<btVector3> scratch_v, scratch_v2;
+  btAlignedObjectArray<btScalar> scratch_r;
+  btAlignedObjectArray<btVector3> scratch_v;
   btAlignedObjectArray<btMatrix3x3> scratch_m;
   btAlignedObjectArray<btQuaternion> world_to_local;
   btAlignedObjectArray<btVector3> local_origin;
-  std::vector<btScalar> unit, response;
-  // Implicit damping/friction: mass matrix, its inverse, the solve's vectors (sized once: the
-  // step allocates nothing).
-  Eigen::MatrixXd inv_mass, mass, k, identity, k_sliding;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt_mass, ldlt_k, ldlt_sliding;
-  Eigen::VectorXd v_free, b, v, damping, friction, rhs, v_sliding, qd_old;
-  std::vector<int> sliding;
+  // Per link (joint i moves link i), for the mass matrix: the joint axis and the pivot-to-CoM
+  // offset in Bullet's link frame (principal axes at the CoM), the mass and principal moments.
+  std::vector<Eigen::Vector3d> axis_local, pivot_to_com;
+  // The composite rigid body algorithm's scratch, world axes: per link the axis, pivot, and the
+  // composite body of the links from it outward (mass, CoM, inertia about that CoM).
+  std::vector<Eigen::Vector3d> axis, pivot, composite_com;
+  std::vector<Eigen::Matrix3d> composite_inertia;
+  std::vector<double> composite_mass;
+  // The rate solve (bullet_arm.h): mass matrix, the system of the current guess (padded with
+  // identity to n x n), the solve's vectors and the guess (sized once: the step allocates
+  // nothing).
+  Eigen::MatrixXd mass, system, identity;
+  Eigen::LLT<Eigen::MatrixXd> llt_system;
+  Eigen::VectorXd v_free, m_v_free, v, v_saved, residual, rhs, x, qd_old, damping, friction;
+  std::vector<int> slide;   // per joint: +1 / -1 sliding that way, 0 stuck (friction > 0 only)
+  std::vector<int> motor;   // per joint: 0 servo linear, +1 at its upper bound, -1 at its lower
+  std::vector<int> moving;  // the joints the current guess lets move
   mutable std::vector<btVector3> omega, vel;  // link velocities for BodyTwist
   // Wrenches for the next step (world axes, force at the CoM, torque about the CoM).
   std::vector<Eigen::Vector3d> force, torque;
@@ -152,19 +162,28 @@ BulletArm::BulletArm(const ArmModel& model, const BulletArmOptions& options)
   }
 
   Impl& s = *impl_;
-  s.inv_mass = s.mass = s.k = s.identity = Eigen::MatrixXd::Identity(n, n);
-  // Sized by a first factorisation, not by assigning LDLT(n): that copies the new object's
-  // uninitialised m_info, undefined behaviour (UBSan: "not a valid value for ComputationInfo").
-  s.ldlt_mass.compute(s.identity);
-  s.ldlt_k.compute(s.identity);
-  s.ldlt_sliding.compute(s.identity);
-  s.v_free = s.b = s.v = s.rhs = s.v_sliding = s.qd_old = Eigen::VectorXd::Zero(n);
-  s.k_sliding = Eigen::MatrixXd::Zero(n, n);
-  s.sliding.reserve(n);
+  s.mass = s.system = s.identity = Eigen::MatrixXd::Identity(n, n);
+  // Sized by a first factorisation, not by assigning LLT(n) (for LDLT that copies the new
+  // object's uninitialised m_info, undefined behaviour: UBSan "not a valid value for
+  // ComputationInfo").
+  s.llt_system.compute(s.identity);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Isometry3d& pc = principal_[i + 1];
+    s.axis_local.push_back(pc.linear().transpose() * model_.joints[i].axis);
+    s.pivot_to_com.push_back(pc.linear().transpose() * pc.translation());
+  }
+  s.axis.resize(n);
+  s.pivot.resize(n);
+  s.composite_com.resize(n);
+  s.composite_inertia.resize(n);
+  s.composite_mass.resize(n);
+  s.v_free = s.m_v_free = s.v = s.v_saved = s.residual = s.rhs = s.x = s.qd_old =
+      Eigen::VectorXd::Zero(n);
+  s.slide.assign(n, 0);
+  s.motor.assign(n, 0);
+  s.moving.reserve(n);
   s.omega.resize(n + 1);
   s.vel.resize(n + 1);
-  impl_->unit.assign(6 + n, 0);
-  impl_->response.assign(6 + n, 0);
   impl_->force.assign(nb, Eigen::Vector3d::Zero());
   impl_->torque.assign(nb, Eigen::Vector3d::Zero());
   impl_->damping = Eigen::VectorXd::Zero(n);
@@ -173,7 +192,8 @@ BulletArm::BulletArm(const ArmModel& model, const BulletArmOptions& options)
     if (options.joint_damping) impl_->damping[i] = model_.joints[i].damping;
     if (options.joint_friction) impl_->friction[i] = model_.joints[i].friction;
   }
-  q_ = qd_ = qdd_ = tau_ = last_motor_ = last_dissipative_ = Eigen::VectorXd::Zero(n);
+  q_ = qd_ = qdd_ = last_motor_ = last_dissipative_ = Eigen::VectorXd::Zero(n);
+  servo_.Resize(n);
   SetJointState(Eigen::VectorXd::Zero(n));
 }
 
@@ -195,9 +215,28 @@ void BulletArm::SetJointState(const Eigen::VectorXd& q, const Eigen::VectorXd& q
   Refresh();
 }
 
+void JointServo::Resize(int n) {
+  bias = gain = Eigen::VectorXd::Zero(n);
+  lower = Eigen::VectorXd::Constant(n, -std::numeric_limits<double>::infinity());
+  upper = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity());
+}
+
 void BulletArm::SetJointTorques(const Eigen::VectorXd& tau) {
   assert(tau.size() == dof());
-  tau_ = tau;
+  servo_.bias = tau;
+  servo_.gain.setZero();
+  servo_.lower.setConstant(-std::numeric_limits<double>::infinity());
+  servo_.upper.setConstant(std::numeric_limits<double>::infinity());
+}
+
+void BulletArm::SetJointServo(const JointServo& servo) {
+  assert(servo.bias.size() == dof() && servo.gain.size() == dof());
+  assert(servo.lower.size() == dof() && servo.upper.size() == dof());
+  assert((servo.gain.array() >= 0).all() && (servo.lower.array() <= servo.upper.array()).all());
+  servo_.bias = servo.bias;
+  servo_.gain = servo.gain;
+  servo_.lower = servo.lower;
+  servo_.upper = servo.upper;
 }
 
 void BulletArm::ApplyWrench(int body, const Wrench& wrench) {
@@ -209,119 +248,250 @@ void BulletArm::ApplyWrench(int body, const Wrench& wrench) {
 
 void BulletArm::Refresh() {
   btMultiBody& mb = *impl_->body;
-  mb.forwardKinematics(impl_->world_to_local, impl_->local_origin);
-  mb.updateCollisionObjectWorldTransforms(impl_->world_to_local, impl_->local_origin);
+  mb.forwardKinematics(impl_->world_to_local, impl_->local_origin);  // the links' frames
   for (int i = 0; i < dof(); ++i) {
     q_[i] = mb.getJointPos(i);
     qd_[i] = mb.getJointVel(i);
   }
 }
 
-// Forward dynamics with every force of this step but damping and friction, then the implicit
-// solve of bullet_arm.h, then the equivalent joint torque.
-void BulletArm::SolveDissipation(double dt) {
+namespace {
+
+// The servo's torque at rate v, and its state there: 0 linear, +1 at upper, -1 at lower.
+int ServoState(const JointServo& s, int i, double v) {
+  const double u = s.bias[i] - s.gain[i] * v;
+  return u > s.upper[i] ? 1 : (u < s.lower[i] ? -1 : 0);
+}
+double ServoTorque(const JointServo& s, int i, double v) {
+  return std::clamp(s.bias[i] - s.gain[i] * v, s.lower[i], s.upper[i]);
+}
+
+}  // namespace
+
+// M(q) by the composite rigid body algorithm (Featherstone 2008, section 6.2) on Bullet's link
+// frames at q (Refresh() keeps them): for the chain's joints i <= j, with C_j the composite body
+// of links j..n-1 (mass m, CoM c, inertia I_c about c) and a unit rate of joint j (axis a_j
+// through p_j: CoM velocity a_j x (c - p_j), angular velocity a_j),
+//   M_ij = a_i . (I_c a_j + (c - p_i) x m (a_j x (c - p_j))),
+// the moment about joint i's axis of C_j's momentum. The same inertias as Bullet's (principal
+// moments in the link frame): the torques the solve adds, M (v - v_free) / dt, are those of our
+// own Newton-Euler to 1e-9 (tests/arm/bullet_arm_test.cpp, RateSolveMeetsItsConditions).
+void BulletArm::MassMatrix() {
   const int n = dof();
   Impl& s = *impl_;
-  btMultiBody& mb = *s.body;
-  last_dissipative_.setZero();
-  if (s.damping.isZero() && s.friction.isZero()) return;
-
-  // qdd without damping and friction (dt = 0: Bullet leaves the rates alone). Also caches what
-  // calcAccelerationDeltasMultiDof needs.
-  mb.computeAccelerationsArticulatedBodyAlgorithmMultiDof(0, s.scratch_r, s.scratch_v, s.scratch_m,
-                                                          false, false, false);
-  const btScalar* qdd = &s.scratch_r[mb.getNumDofs() + 6];
-  for (int i = 0; i < n; ++i) s.v_free[i] = qd_[i] + dt * qdd[i];
-  // M^-1 column by column: the joint accelerations of a unit joint torque.
+  const btMultiBody& mb = *s.body;
+  for (int j = n - 1; j >= 0; --j) {
+    const btTransform& t = mb.getLink(j).m_cachedWorldTransform;
+    Eigen::Matrix3d r;
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) r(a, b) = t.getBasis()[a][b];
+    }
+    const Eigen::Vector3d com = Eig(t.getOrigin());
+    s.axis[j] = r * s.axis_local[j];
+    s.pivot[j] = com - r * s.pivot_to_com[j];
+    const double m = model_.bodies[j + 1].inertial.mass;
+    const Eigen::Matrix3d inertia = r * moments_[j + 1].asDiagonal() * r.transpose();
+    if (j == n - 1) {
+      s.composite_mass[j] = m;
+      s.composite_com[j] = com;
+      s.composite_inertia[j] = inertia;
+      continue;
+    }
+    // Link j joined to C_{j+1}: parallel axes to the new CoM.
+    const double mo = s.composite_mass[j + 1];
+    const double mt = m + mo;
+    const Eigen::Vector3d c = (m * com + mo * s.composite_com[j + 1]) / mt;
+    const Eigen::Vector3d r1 = com - c, r2 = s.composite_com[j + 1] - c;
+    const Eigen::Matrix3d one = Eigen::Matrix3d::Identity();
+    s.composite_inertia[j] = inertia + m * (r1.squaredNorm() * one - r1 * r1.transpose()) +
+                             s.composite_inertia[j + 1] +
+                             mo * (r2.squaredNorm() * one - r2 * r2.transpose());
+    s.composite_mass[j] = mt;
+    s.composite_com[j] = c;
+  }
   for (int j = 0; j < n; ++j) {
-    std::fill(s.unit.begin(), s.unit.end(), 0);
-    s.unit[6 + j] = 1;
-    mb.calcAccelerationDeltasMultiDof(s.unit.data(), s.response.data(), s.scratch_r2, s.scratch_v2);
-    for (int i = 0; i < n; ++i) s.inv_mass(i, j) = s.response[6 + i];
+    const double m = s.composite_mass[j];
+    const Eigen::Vector3d& c = s.composite_com[j];
+    const Eigen::Vector3d momentum = m * s.axis[j].cross(c - s.pivot[j]);
+    const Eigen::Vector3d spin = s.composite_inertia[j] * s.axis[j];
+    for (int i = 0; i <= j; ++i) {
+      s.mass(i, j) = s.mass(j, i) = s.axis[i].dot(spin + (c - s.pivot[i]).cross(momentum));
+    }
   }
-  for (int i = 0; i < n; ++i) {
-    for (int j = i + 1; j < n; ++j)
-      s.inv_mass(i, j) = s.inv_mass(j, i) = 0.5 * (s.inv_mass(i, j) + s.inv_mass(j, i));
-  }
-  s.ldlt_mass.compute(s.inv_mass);
-  s.mass = s.ldlt_mass.solve(s.identity);
-  s.k = s.mass;
-  s.k.diagonal() += dt * s.damping;
-  s.b.noalias() = s.mass * s.v_free;
+}
 
-  // Damping alone: v = K^-1 b. With friction: coordinate descent on the convex objective
-  // (soft thresholding per joint), then the linear solve on the active set it found.
-  s.ldlt_k.compute(s.k);
-  s.v = s.ldlt_k.solve(s.b);
-  if (!s.friction.isZero()) {
-    for (int sweep = 0; sweep < 100; ++sweep) {
+// v from v_free (bullet_arm.h): the joints whose servo has a gain, damping or friction solved
+// together; then the motor torques of those servos and the dissipative torques.
+void BulletArm::SolveRates(double dt) {
+  const int n = dof();
+  Impl& s = *impl_;
+  const JointServo& servo = servo_;
+  last_dissipative_.setZero();
+  bool implicit = !s.damping.isZero() || !s.friction.isZero();
+  for (int i = 0; i < n; ++i) implicit |= servo.gain[i] > 0;
+  if (!implicit) {
+    s.v = s.v_free;
+    return;
+  }
+
+  MassMatrix();
+  s.m_v_free.noalias() = s.mass * s.v_free;
+
+  // The linear system of a guess: the moving joints' rows of
+  //   (M + dt C + dt G_lin) v = M v_free + dt (servo constant - friction_i slide_i),
+  // G_lin the gains of linear servos, the constant the bias (linear) or the bound (saturated);
+  // stuck joints v_i = 0. In the top-left corner of the identity-padded system.
+  auto solve_guess = [&]() {
+    s.moving.clear();
+    for (int i = 0; i < n; ++i) {
+      if (!(s.friction[i] > 0 && s.slide[i] == 0)) s.moving.push_back(i);
+    }
+    const int m = static_cast<int>(s.moving.size());
+    s.system.setIdentity();
+    s.rhs.setZero();
+    for (int a = 0; a < m; ++a) {
+      const int i = s.moving[a];
+      for (int b = 0; b < m; ++b) s.system(a, b) = s.mass(i, s.moving[b]);
+      double constant = 0, gain = 0;
+      if (servo.gain[i] > 0) {
+        if (s.motor[i] == 0) {
+          constant = servo.bias[i];
+          gain = servo.gain[i];
+        } else {
+          constant = s.motor[i] > 0 ? servo.upper[i] : servo.lower[i];
+        }
+      }
+      s.system(a, a) += dt * (s.damping[i] + gain);
+      s.rhs[a] = s.m_v_free[i] + dt * (constant - s.friction[i] * s.slide[i]);
+    }
+    s.llt_system.compute(s.system);
+    s.x = s.llt_system.solve(s.rhs);
+    s.v.setZero();
+    for (int a = 0; a < m; ++a) s.v[s.moving[a]] = s.x[a];
+  };
+  // Corrects the guess where v contradicts it; true when nothing needed correcting.
+  auto consistent = [&]() {
+    bool ok = true;
+    s.residual.noalias() = s.mass * (s.v - s.v_free);  // dt x the torques the solve added
+    for (int i = 0; i < n; ++i) {
+      const bool servoed = servo.gain[i] > 0;
+      if (servoed) {
+        const int state = ServoState(servo, i, s.v[i]);
+        ok &= state == s.motor[i];
+        s.motor[i] = state;
+      }
+      if (!(s.friction[i] > 0)) continue;
+      if (s.slide[i] != 0) {
+        if (s.v[i] * s.slide[i] <= 0) {  // slid back through zero: stuck
+          s.slide[i] = 0;
+          ok = false;
+        }
+      } else {
+        // The friction torque that holds it: f = tau_servo(0) - residual / dt - C 0.
+        const double tau = servoed ? ServoTorque(servo, i, 0.0) : 0.0;
+        const double f = tau - s.residual[i] / dt;
+        if (std::abs(f) > s.friction[i]) {
+          s.slide[i] = f > 0 ? 1 : -1;
+          ok = false;
+        }
+      }
+    }
+    return ok;
+  };
+
+  // The guess: servos linear, each joint sliding the way it moved, stuck if it was at rest.
+  for (int i = 0; i < n; ++i) {
+    s.motor[i] = 0;
+    s.slide[i] = qd_[i] > 0 ? 1 : (qd_[i] < 0 ? -1 : 0);
+  }
+  bool solved = false;
+  for (int round = 0; round < 4 * n + 4 && !solved; ++round) {
+    solve_guess();
+    solved = consistent();
+  }
+  if (!solved) {
+    // The guesses cycled: coordinate descent on the convex objective, each joint's
+    // one-dimensional problem solved exactly (its torque is monotone and piecewise linear in
+    // v_i), then the linear solve on the states it found, kept if consistent.
+    for (int sweep = 0; sweep < 200; ++sweep) {
       double change = 0;
       for (int i = 0; i < n; ++i) {
-        const double r = s.b[i] - s.k.row(i).dot(s.v) + s.k(i, i) * s.v[i];
+        const double k = s.mass(i, i) + dt * s.damping[i];
+        const double r = s.m_v_free[i] - s.mass.row(i).dot(s.v) + s.mass(i, i) * s.v[i];
+        const bool servoed = servo.gain[i] > 0;
+        const double tau0 = servoed ? ServoTorque(servo, i, 0.0) : 0.0;
+        const double h0 = -r - dt * tau0;  // k v - r - dt tau(v) at v = 0
         const double limit = dt * s.friction[i];
-        const double vi = std::abs(r) <= limit ? 0 : (r - std::copysign(limit, r)) / s.k(i, i);
+        double vi = 0;
+        if (std::abs(h0) > limit) {
+          const double rr = h0 < 0 ? r - limit : r + limit;  // k v - rr - dt tau(v) = 0
+          if (!servoed) {
+            vi = rr / k;
+          } else {
+            vi = (rr + dt * servo.bias[i]) / (k + dt * servo.gain[i]);
+            const double u = servo.bias[i] - servo.gain[i] * vi;
+            if (u > servo.upper[i]) vi = (rr + dt * servo.upper[i]) / k;
+            if (u < servo.lower[i]) vi = (rr + dt * servo.lower[i]) / k;
+          }
+        }
         change = std::max(change, std::abs(vi - s.v[i]));
         s.v[i] = vi;
       }
       if (change <= 1e-14 * (1 + s.v.cwiseAbs().maxCoeff())) break;
     }
-    // Polish: sliding joints (v != 0) obey K v = b - dt friction sign(v), stuck ones v = 0.
-    std::vector<int>& sliding = s.sliding;
-    sliding.clear();
+    s.v_saved = s.v;
     for (int i = 0; i < n; ++i) {
-      if (s.v[i] != 0) sliding.push_back(i);
+      s.slide[i] = s.v[i] > 0 ? 1 : (s.v[i] < 0 ? -1 : 0);
+      s.motor[i] = servo.gain[i] > 0 ? ServoState(servo, i, s.v[i]) : 0;
     }
-    if (!sliding.empty() && static_cast<int>(sliding.size()) < n) {
-      // The sliding joints' block, in the top-left corner of the preallocated matrices.
-      const int m = static_cast<int>(sliding.size());
-      s.k_sliding.setIdentity();
-      s.rhs.setZero();
-      for (int a = 0; a < m; ++a) {
-        s.rhs[a] = s.b[sliding[a]] - dt * s.friction[sliding[a]] * (s.v[sliding[a]] > 0 ? 1 : -1);
-        for (int c = 0; c < m; ++c) s.k_sliding(a, c) = s.k(sliding[a], sliding[c]);
-      }
-      s.ldlt_sliding.compute(s.k_sliding);
-      s.v_sliding = s.ldlt_sliding.solve(s.rhs);
-      bool consistent = true;
-      for (int a = 0; a < m; ++a) consistent &= (s.v_sliding[a] > 0) == (s.v[sliding[a]] > 0);
-      if (consistent) {
-        for (int a = 0; a < m; ++a) s.v[sliding[a]] = s.v_sliding[a];
-      }
-    } else if (!sliding.empty()) {
-      // All sliding: K v = b - dt friction sign(v).
-      for (int i = 0; i < n; ++i) s.rhs[i] = s.b[i] - dt * s.friction[i] * (s.v[i] > 0 ? 1 : -1);
-      s.v_sliding = s.ldlt_k.solve(s.rhs);
-      bool consistent = true;
-      for (int i = 0; i < n; ++i) consistent &= (s.v_sliding[i] > 0) == (s.v[i] > 0);
-      if (consistent) s.v = s.v_sliding;
-    }
+    solve_guess();
+    if (!consistent()) s.v = s.v_saved;
   }
-  s.v_free -= s.v;  // now v_free - v
-  last_dissipative_.noalias() = s.mass * s.v_free;
-  last_dissipative_ /= -dt;
-  for (int i = 0; i < n; ++i) mb.addJointTorque(i, last_dissipative_[i]);
+
+  // The torques: the servos' at v, and what else the solve added (damping and friction).
+  s.residual.noalias() = s.mass * (s.v - s.v_free);
+  for (int i = 0; i < n; ++i) {
+    if (servo.gain[i] > 0) last_motor_[i] = ServoTorque(servo, i, s.v[i]);
+    last_dissipative_[i] = s.residual[i] / dt - (servo.gain[i] > 0 ? last_motor_[i] : 0.0);
+  }
 }
 
 void BulletArm::Step(double dt) {
   const int n = dof();
   Impl& s = *impl_;
   btMultiBody& mb = *s.body;
-  // Gravity, wrenches and motor torques, in Bullet's accumulators for this step.
+  // Gravity, wrenches and the servos without a gain (a constant torque), in Bullet's
+  // accumulators for this step.
   for (int b = 1; b <= n; ++b) {
     const Eigen::Vector3d f = model_.bodies[b].inertial.mass * gravity_ + s.force[b];
     mb.addLinkForce(b - 1, BtVec(f));
     mb.addLinkTorque(b - 1, BtVec(s.torque[b]));
   }
-  for (int i = 0; i < n; ++i) mb.addJointTorque(i, tau_[i]);
-  last_motor_ = tau_;
-  SolveDissipation(dt);
+  for (int i = 0; i < n; ++i) {
+    if (servo_.gain[i] > 0) continue;
+    last_motor_[i] = ServoTorque(servo_, i, 0.0);
+    mb.addJointTorque(i, last_motor_[i]);
+  }
+  // qdd with those forces (dt = 0: Bullet leaves the rates alone; it also caches what
+  // calcAccelerationDeltasMultiDof needs), then the rates at the step's end.
+  mb.computeAccelerationsArticulatedBodyAlgorithmMultiDof(0, s.scratch_r, s.scratch_v, s.scratch_m,
+                                                          false, false, false);
+  const btScalar* qdd = &s.scratch_r[mb.getNumDofs() + 6];
+  for (int i = 0; i < n; ++i) s.v_free[i] = qd_[i] + dt * qdd[i];
+  SolveRates(dt);
 
+  // Semi-implicit Euler: q += dt v (Bullet's own position step), forces cleared.
+  for (int i = 0; i < n; ++i) mb.setJointVel(i, s.v[i]);
+  mb.stepPositionsMultiDof(dt);
+  mb.clearForcesAndTorques();
   s.qd_old = qd_;
-  s.world.stepSimulation(dt, 0, dt);  // one step of exactly dt
   Refresh();
   qdd_ = (qd_ - s.qd_old) / dt;
   time_ += dt;
-  tau_.setZero();
+  servo_.bias.setZero();
+  servo_.gain.setZero();
+  servo_.lower.setConstant(-std::numeric_limits<double>::infinity());
+  servo_.upper.setConstant(std::numeric_limits<double>::infinity());
   for (int b = 0; b <= n; ++b) {
     s.force[b].setZero();
     s.torque[b].setZero();

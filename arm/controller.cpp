@@ -37,6 +37,15 @@ void JointPid::Preload(const Eigen::VectorXd& torques) {
   }
 }
 
+void JointPid::Integrate(int i, double e, double dt) {
+  const PidGains& g = gains_[i];
+  integral_[i] += e * dt;
+  if (g.i > 0) {
+    const double bound = joints_[i].effort / g.i;  // anti-windup: |i * integral| <= effort
+    integral_[i] = std::clamp(integral_[i], -bound, bound);
+  }
+}
+
 void JointPid::Compute(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& qd_ref,
                        const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double dt,
                        Eigen::VectorXd* demanded, Eigen::VectorXd* applied) {
@@ -47,14 +56,32 @@ void JointPid::Compute(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& qd_r
     const PidGains& g = gains_[i];
     const double e = q_ref[i] - q[i];
     const double de = qd_ref[i] - qd[i];
-    integral_[i] += e * dt;
-    if (g.i > 0) {
-      const double bound = joints_[i].effort / g.i;  // anti-windup: |i * integral| <= effort
-      integral_[i] = std::clamp(integral_[i], -bound, bound);
-    }
+    Integrate(i, e, dt);
     (*demanded)[i] = g.p * e + g.i * integral_[i] + g.d * de;
     (*applied)[i] = LimitTorque((*demanded)[i], qd[i], joints_[i]);
   }
+}
+
+void JointPid::ComputeServo(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& qd_ref,
+                            const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double dt,
+                            JointServo* servo) {
+  const int n = static_cast<int>(joints_.size());
+  if (servo->bias.size() != n) servo->Resize(n);
+  for (int i = 0; i < n; ++i) {
+    const PidGains& g = gains_[i];
+    const Joint& j = joints_[i];
+    Integrate(i, q_ref[i] - q[i], dt);
+    servo->bias[i] = g.p * (q_ref[i] - q[i]) + g.i * integral_[i] + g.d * qd_ref[i];
+    servo->gain[i] = g.d;
+    // LimitTorque's rule as bounds: no torque toward an exceeded velocity limit.
+    servo->lower[i] = qd[i] < -j.velocity ? 0.0 : -j.effort;
+    servo->upper[i] = qd[i] > j.velocity ? 0.0 : j.effort;
+  }
+}
+
+void JointPid::Demanded(const JointServo& servo, const Eigen::VectorXd& v,
+                        Eigen::VectorXd* demanded) {
+  *demanded = servo.bias - servo.gain.cwiseProduct(v);
 }
 
 namespace {

@@ -12,9 +12,20 @@
 // direction of an exceeded velocity limit. The PID (ros_control's form):
 //   e = q_ref - q, de = qd_ref - qd, integral += e dt (clamped so |i integral| <= effort),
 //   demanded = p e + i integral + d de.
-// No angle wrapping: continuous joints are driven through any number of turns. The D term is
-// explicit: stable for dt < 2 I / d, I the joint's effective inertia (about 1.2e-4 s for
-// j_scoop_yaw, d = 10); the coupled step of the DEM is well below.
+// No angle wrapping: continuous joints are driven through any number of turns.
+// The D term, two ways (PidDTerm):
+// - explicit (Compute): qd is the measured rate at the step's start; stable for dt < 2 I / d, I
+//   the joint's effective inertia (about 1.2e-4 s for j_scoop_yaw, d = 10).
+// - implicit (ComputeServo, the default of the table-driven arm): the D term is taken at the
+//   step's end rate v, solved with the joint dynamics (arm::BulletArm's servo, bullet_arm.h):
+//     demanded(v) = bias - d v,   bias = p e + i integral + d qd_ref,
+//     applied = clamp(demanded(v), lower, upper),
+//   lower, upper = -+effort, with the velocity rule above as a bound: upper = 0 when
+//   qd > velocity_limit, lower = 0 when qd < -velocity_limit (qd measured at the step's start).
+//   Backward Euler in the D term: stable at any step, so the arm can step at the lander's own
+//   400 Hz; the P and I terms stay explicit (semi-implicit Euler: stable for dt < 2 / omega,
+//   omega = sqrt(p / I): 2.5 ms is several times inside that on every joint of the lander's arm).
+//   The demanded and applied torques are known after the step (Demanded()).
 //
 // Inverse kinematics: damped least squares on the Jacobian of a link frame (SolveIk), and a
 // Cartesian pose path of that link turned into joint references that respect joint position
@@ -28,8 +39,13 @@
 #include <vector>
 
 #include "arm/arm_model.h"
+#include "arm/bullet_arm.h"
 
 namespace arm {
+
+// Where the PID's D term takes the joint rate: at the step's start (explicit) or its end
+// (implicit, solved with the dynamics).
+enum class PidDTerm { kExplicit, kImplicit };
 
 struct PidGains {
   double p = 0;  // [N m/rad]
@@ -63,12 +79,21 @@ class JointPid {
   void Compute(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& qd_ref,
                const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double dt,
                Eigen::VectorXd* demanded, Eigen::VectorXd* applied);
+  // The implicit form: the same integral update, the servo of the step in *servo (bias, gain d,
+  // bounds as above) for BulletArm::SetJointServo.
+  void ComputeServo(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& qd_ref,
+                    const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double dt,
+                    JointServo* servo);
+  // After the step: the demanded torque of a servo at the end-of-step rates v (bias - d v).
+  static void Demanded(const JointServo& servo, const Eigen::VectorXd& v,
+                       Eigen::VectorXd* demanded);
   const std::vector<PidGains>& gains() const { return gains_; }
 
  private:
   std::vector<Joint> joints_;
   std::vector<PidGains> gains_;
   Eigen::VectorXd integral_;
+  void Integrate(int i, double e, double dt);  // integral += e dt, anti-windup clamp
 };
 
 struct IkOptions {

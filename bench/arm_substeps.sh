@@ -15,12 +15,15 @@
 #
 #   bench/arm_substeps.sh                          scenes/arm/nominal_snow.yaml, 3 rounds, 1 thread
 #   NRUNS=5 KS="1 2 5 10" bench/arm_substeps.sh
+#   KS="1 1x 2 5 10" bench/arm_substeps.sh       a k with an x: the PID's D term explicit
+#                                                (arm.d_term: explicit; plain k: the scene's)
 #
 # The cost is taken from the run's CPU time (user + system, bed load included: the same for every
 # k), which a shared host's contention moves far less than the wall time (also recorded).
 #
 # Environment: SCENE, NRUNS (3), KS ("1 2 5 10"), RAYLEIGH (0.05), THREADS (1),
-# BIN (build/scoopsim), MACHINE (hostname), QUIET_WAIT (seconds, default 0: bench/wait_quiet.sh).
+# BIN (build/scoopsim), MACHINE (hostname), QUIET_WAIT (seconds, default 0: bench/wait_quiet.sh),
+# COMMIT (the CSV's commit column; default the checkout's HEAD).
 # Appends one CSV row per run to bench/results/$MACHINE/arm_substeps.csv.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -33,7 +36,7 @@ BIN=${BIN:-$ROOT/build/scoopsim}
 MACHINE=${MACHINE:-$(hostname -s 2>/dev/null || hostname)}
 RESDIR="$ROOT/bench/results/$MACHINE"
 CSV="$RESDIR/arm_substeps.csv"
-COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+COMMIT=${COMMIT:-$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)}
 mkdir -p "$RESDIR"
 [ -s "$CSV" ] ||
   echo "date,commit,scene,rayleigh_fraction,k,run,threads,dig_wall_s,run_cpu_s,dem_steps,ms_per_dem_step_wall,ms_per_dem_step_cpu,force_rms_pct_of_peak,torque_rms_pct_of_peak,peak_force_ratio" >"$CSV"
@@ -57,7 +60,8 @@ open(work + "/bed.yaml", "w").write(text)
 text = re.sub(r"\nbed:\n", "\nbed:\n  file: " + work + "/bed.h5\n", text)
 assert "\narm:\n" in text, "the scene needs an arm: block"
 for k in ks:
-    open(f"{work}/k{k}.yaml", "w").write(text.replace("\narm:\n", f"\narm:\n  substeps: {k}\n"))
+    keys = f"  substeps: {k.rstrip('x')}\n" + ("  d_term: explicit\n" if k.endswith("x") else "")
+    open(f"{work}/k{k}.yaml", "w").write(text.replace("\narm:\n", "\narm:\n" + keys))
 kinematic = re.sub(r"\narm:\n(  .*\n)+", "\n", text)
 open(work + "/kinematic.yaml", "w").write(kinematic)
 m = re.search(r"start: \[([0-9.eE+-]+), ", kinematic)
@@ -116,7 +120,7 @@ wall_ms, cpu_ms = {k: [] for k in ks}, {k: [] for k in ks}
 now = datetime.datetime.utcnow().strftime("%Y-%m-%dT%H:%M:%S")
 with open(csv, "a") as out:
     for line in open(f"{work}/log"):
-        m = re.match(r"k (\d+) run (\d+): dig wall ([0-9.]+) s, run CPU ([0-9.]+) s, (\d+) DEM",
+        m = re.match(r"k (\d+x?) run (\d+): dig wall ([0-9.]+) s, run CPU ([0-9.]+) s, (\d+) DEM",
                      line)
         if not m:
             continue

@@ -7,6 +7,8 @@
 #
 #   bench/run_dig_step.sh                       # AT=0.7 s, 5 runs of 1500 steps, 2 threads
 #   BINS="build/scoopsim /tmp/old/scoopsim" NRUNS=8 bench/run_dig_step.sh   # interleaved A/B
+#   ARM=1 bench/run_dig_step.sh                 # each run also with the lander's arm stepped
+#                                               # beside the bed (bench step --arm), interleaved
 #
 # Output: one JSON line per run, then the median ms_per_step of each binary.
 set -euo pipefail
@@ -45,12 +47,22 @@ fi
 sed -e "s|^materials: .*|materials: $ROOT/scenes/materials.yaml|" -e "s|file: .*|file: $STATE|" \
     -e "/^dig:/,/^[a-z]/{/^dig:/d;/^  /d}" -e "/^output:/d" "$SCENE" > "$CACHE/dig_state.yaml"
 
+ARM=${ARM:-0}
 for r in $(seq "$NRUNS"); do
   for b in $BINS; do
     echo "$b $("$b" bench step "$CACHE/dig_state.yaml" --steps "$STEPS" --warm "$WARM" --threads "$THREADS")"
+    if [ "$ARM" = 1 ]; then
+      echo "$b+arm $("$b" bench step "$CACHE/dig_state.yaml" --steps "$STEPS" --warm "$WARM" \
+        --threads "$THREADS" --arm "$ROOT/assets/lander_arm.urdf")"
+    fi
   done
 done | tee "$CACHE/dig_step_last.txt"
 for b in $BINS; do
-  grep "^$b " "$CACHE/dig_step_last.txt" | sed 's/.*"ms_per_step":\([0-9.]*\).*/\1/' | sort -n |
-    awk -v b="$b" '{a[NR]=$1} END{printf "%s: median %.4f ms a step (%d runs, min %.4f, max %.4f)\n", b, a[int((NR+1)/2)], NR, a[1], a[NR]}'
+  for v in "$b" "$b+arm"; do
+    grep -q "^$v " "$CACHE/dig_step_last.txt" || continue
+    grep "^$v " "$CACHE/dig_step_last.txt" | sed 's/.*"ms_per_step":\([0-9.]*\).*/\1/' | sort -n |
+      awk -v b="$v" '{a[NR]=$1} END{printf "%s: median %.4f ms a step (%d runs, min %.4f, max %.4f)\n", b, a[int((NR+1)/2)], NR, a[1], a[NR]}'
+  done
+  grep "^$b+arm " "$CACHE/dig_step_last.txt" | sed 's/.*"arm_ms_per_step":\([0-9.]*\).*/\1/' |
+    sort -n | awk -v b="$b" 'NF{a[NR]=$1} END{if (NR) printf "%s: the arm alone, median %.5f ms a step (min %.5f, max %.5f)\n", b, a[int((NR+1)/2)], a[1], a[NR]}'
 done

@@ -97,6 +97,7 @@ struct ArmDriver::Impl {
   int count = 0;
   arm::Wrench dem_wrench, contact_wrench;  // applied in the last Bullet step
   Eigen::VectorXd q_ref, qd_ref, demanded, applied;
+  arm::JointServo servo;  // the PID's step with its D term implicit (arm.d_term: implicit)
   arm::ArmSample sample;
   uint64_t active = 0;
   double next_ft = 0;
@@ -125,6 +126,7 @@ struct ArmDriver::Impl {
     scoop_body = n;  // the tip body: l_scoop's frame (arm/arm_model.h)
     sensor = spec.sensor_joint.empty() ? -1 : model.JointIndex(spec.sensor_joint);
     q_ref = qd_ref = demanded = applied = Eigen::VectorXd::Zero(n);
+    servo.Resize(n);
     sample.joints.resize(n);
     report.peak_demanded.assign(n, 0.0);
     report.saturation_time.assign(n, 0.0);
@@ -355,12 +357,21 @@ struct ArmDriver::Impl {
       count = 0;
     }
     Reference(t_b);
-    pid->Compute(q_ref, qd_ref, bullet->q(), bullet->qd(), h, &demanded, &applied);
-    bullet->SetJointTorques(applied);
+    if (spec.implicit_d) {
+      pid->ComputeServo(q_ref, qd_ref, bullet->q(), bullet->qd(), h, &servo);
+      bullet->SetJointServo(servo);
+    } else {
+      pid->Compute(q_ref, qd_ref, bullet->q(), bullet->qd(), h, &demanded, &applied);
+      bullet->SetJointTorques(applied);
+    }
     bullet->ApplyWrench(scoop_body, dem_wrench);
     ObstacleContact(mesh);
     if (!obstacles.empty()) bullet->ApplyWrench(scoop_body, contact_wrench);
     bullet->Step(h);
+    if (spec.implicit_d) {  // the torques at the end-of-step rates the step solved for
+      arm::JointPid::Demanded(servo, bullet->qd(), &demanded);
+      applied = bullet->motor_torques();
+    }
     t_b += h;
     prev = cur;
     cur = ScoopMotion();
@@ -529,6 +540,7 @@ void ArmDriver::Record(H5Output* out, double time) {
         "arm_timing",
         std::string(a.spec.timing == CouplingTiming::kBulletFirst ? "bullet_first" : "dem_first"));
     out->SetAttribute("arm_substeps", static_cast<double>(a.k));
+    out->SetAttribute("arm_d_term", std::string(a.spec.implicit_d ? "implicit" : "explicit"));
     out->SetAttribute("arm_sensor_joint", a.spec.sensor_joint);
     const char* base_names[4] = {"arm_base_x", "arm_base_y", "arm_base_z", "arm_base_yaw"};
     for (int i = 0; i < 4; ++i) out->SetAttribute(base_names[i], a.report.base[i]);

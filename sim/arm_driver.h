@@ -14,6 +14,9 @@
 // Each Bullet step of h = arm.substeps x dt:
 //   references q_ref(t), qd_ref(t) (linear between the samples; held after a stop or a retract)
 //   PID -> demanded torque, clamped at the effort limit (derated by arm.derate) -> applied torque
+//   (arm.d_term: implicit, the default on a wrench table: the D term at the step's end rate,
+//   solved with the dynamics, arm/controller.h; demanded and applied are then the end-of-step
+//   torques; coupled to the DEM the default stays explicit)
 //   the DEM's wrench averaged over the DEM steps since the last Bullet step, and the contact of the
 //   scoop with each fixed obstacle sphere (a linear penalty on the deepest point, damped), applied
 //   to l_scoop; Bullet steps; the fault monitor takes the sample (arm/fault_monitor.h); the

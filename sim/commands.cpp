@@ -4,16 +4,18 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <memory>
 
+#include "arm/bullet_arm.h"
+#include "arm/controller.h"
+#include "arm/kinematics.h"
 #include "sim/arm_driver.h"
-#include "sim/table_arm.h"
 #include "sim/bed.h"
 #include "sim/bed_io.h"
 #include "sim/checkpoint.h"
@@ -21,6 +23,7 @@
 #include "sim/h5_output.h"
 #include "sim/internal_h5.h"
 #include "sim/progress.h"
+#include "sim/table_arm.h"
 #include "sim/world.h"
 
 namespace sim {
@@ -96,10 +99,11 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
   SaveBed(options.output, world.system(), scene.yaml_text);
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  Status("scoopsim: bed of %lld particles (%zu spheres), %d layer(s), %.3f s simulated in %.1f s; "
-         "saved %s\n",
-         static_cast<long long>(world.system().num_bodies()), world.system().particles().size(),
-         r.layers, r.sim_time, wall, options.output.c_str());
+  Status(
+      "scoopsim: bed of %lld particles (%zu spheres), %d layer(s), %.3f s simulated in %.1f s; "
+      "saved %s\n",
+      static_cast<long long>(world.system().num_bodies()), world.system().particles().size(),
+      r.layers, r.sim_time, wall, options.output.c_str());
   return status;
 }
 
@@ -112,8 +116,9 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   RefuseOutputOverInput(options.output, scene.bed.file, scene.path + ": bed.file");
   const bool checkpoints = options.checkpoint_every > 0 || options.resume;
   if (checkpoints && scene.arm.enabled) {
-    throw InputError(scene.path + ": arm: a run with an arm cannot be checkpointed or resumed "
-                                  "(Bullet's solver state is not saved)");
+    throw InputError(scene.path +
+                     ": arm: a run with an arm cannot be checkpointed or resumed "
+                     "(Bullet's solver state is not saved)");
   }
   const std::string restart = CheckpointPath(options.output);
   World world(scene, options.threads);
@@ -211,7 +216,8 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
     bool cached = !bed_path.empty() && fs::exists(bed_path);
     if (cached && BedSceneYaml(bed_path) != s.yaml_text) {
       cached = false;
-      std::fprintf(stderr, "scoopsim: study shape: %s was made from another scene; making it again\n",
+      std::fprintf(stderr,
+                   "scoopsim: study shape: %s was made from another scene; making it again\n",
                    bed_path.c_str());
     }
     if (cached) {
@@ -265,11 +271,10 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
     out.SetAttribute("peak_overlap", summary.peak_overlap);
     out.SetStateHash(system->StateHash());
     out.SetGroup("");
-    const double table[10] = {row.spheres_per_clump, clumps,   spheres,  row.time_step,
-                              row.bed_wall,          row.dig_wall, dig_cpu, row.peak,
-                              row.mean,              row.overlap};
-    const char* columns[10] = {"spheres_per_clump", "clumps",     "spheres",    "time_step",
-                               "bed_wall_s",        "dig_wall_s", "dig_cpu_s",  "peak_force",
+    const double table[10] = {row.spheres_per_clump, clumps,  spheres,  row.time_step, row.bed_wall,
+                              row.dig_wall,          dig_cpu, row.peak, row.mean,      row.overlap};
+    const char* columns[10] = {"spheres_per_clump", "clumps",      "spheres",   "time_step",
+                               "bed_wall_s",        "dig_wall_s",  "dig_cpu_s", "peak_force",
                                "mean_force",        "peak_overlap"};
     for (int k = 0; k < 10; ++k) out.AppendRow(std::string("/table/") + columns[k], &table[k], 1);
     rows.push_back(row);
@@ -347,12 +352,52 @@ int BenchSettle(const BenchSettleOptions& options) {
   return 0;
 }
 
+// The arm of `bench step --arm`: the lander's PID, D term implicit, holding the digging pose
+// against gravity and a constant 20 N on the scoop, one Bullet step per DEM step (a coupled
+// dig's Advance: PID, wrench, Bullet's step, the scoop's pose and twist).
+struct BenchArm {
+  arm::ArmModel model;
+  std::unique_ptr<arm::BulletArm> bullet;
+  std::unique_ptr<arm::JointPid> pid;
+  arm::JointServo servo;
+  Eigen::VectorXd q_ref, qd_ref;
+  double seconds = 0;  // spent stepping it [s]
+  double sink = 0;     // keeps the pose and twist reads
+  BenchArm(const std::string& urdf, const dem::Vec3& gravity) : model(arm::LoadArmModel(urdf)) {
+    if (model.dof() != 6)
+      throw InputError(urdf + ": bench step --arm: expected the lander's six-joint arm");
+    arm::BulletArmOptions options;
+    options.gravity = Eigen::Vector3d(gravity.x, gravity.y, gravity.z);
+    bullet = std::make_unique<arm::BulletArm>(model, options);
+    pid = std::make_unique<arm::JointPid>(model, arm::LanderGains());
+    q_ref = Eigen::Map<const Eigen::VectorXd>(arm::kLanderPoses[3].q.data(), 6);
+    qd_ref = Eigen::VectorXd::Zero(6);
+    bullet->SetJointState(q_ref);
+    pid->Preload(arm::GravityTorques(model, q_ref, options.gravity));
+  }
+  void Step(double dt) {
+    const auto t0 = std::chrono::steady_clock::now();
+    pid->ComputeServo(q_ref, qd_ref, bullet->q(), bullet->qd(), dt, &servo);
+    bullet->SetJointServo(servo);
+    arm::Wrench w;
+    w.force = Eigen::Vector3d(-20, 0, 0);
+    w.point = bullet->BodyPose(6).translation();
+    bullet->ApplyWrench(6, w);
+    bullet->Step(dt);
+    const arm::Twist twist = bullet->BodyTwist(6);
+    sink += bullet->BodyPose(6).translation().x() + twist.linear.x();
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+};
+
 int BenchStep(const BenchStepOptions& options) {
   const Scene scene = LoadScene(options.scene);
   if (scene.bed.file.empty()) throw InputError(options.scene + ": bed.file: expected a saved bed");
   World world(scene, options.threads);
   world.LoadState(scene.bed.file);
   const dem::System* system = &world.system();
+  std::unique_ptr<BenchArm> bench_arm;
+  if (!options.arm.empty()) bench_arm = std::make_unique<BenchArm>(options.arm, scene.gravity);
   auto run = [&](int64_t steps, int64_t* awake_sum) {
     for (int64_t k = 0; k < steps; ++k) {
       const dem::StepStatus status = world.Step();
@@ -360,6 +405,7 @@ int BenchStep(const BenchStepOptions& options) {
         Status("scoopsim: simulation unstable: %s\n", status.message.c_str());
         return false;
       }
+      if (bench_arm) bench_arm->Step(scene.time_step);
       *awake_sum += system->neighbor_stats().awake;
     }
     return true;
@@ -369,22 +415,30 @@ int BenchStep(const BenchStepOptions& options) {
   const dem::NeighborStats before = system->neighbor_stats();
   awake = 0;
   const dem::PhaseTimes phases0 = system->phase_times();
+  if (bench_arm) bench_arm->seconds = 0;
   const auto t0 = std::chrono::steady_clock::now();
   if (!run(options.steps, &awake)) return kExitUnstable;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const dem::NeighborStats ns = system->neighbor_stats();
   const double steps = static_cast<double>(std::max<int64_t>(options.steps, 1));
   const std::string phases = PhaseJson(PhasesSince(system->phase_times(), phases0), wall, steps);
+  std::string arm_json;
+  if (bench_arm) {
+    char buffer[96];
+    std::snprintf(buffer, sizeof buffer, "\"arm_ms_per_step\":%.5f,",
+                  1e3 * bench_arm->seconds / steps);
+    arm_json = buffer;
+  }
   std::printf(
       "{\"bench\":\"step\",\"particles\":%zu,\"awake_per_step\":%.0f,\"steps\":%lld,"
       "\"threads\":%d,\"wall_s\":%.4f,\"ms_per_step\":%.4f,\"awake_particle_steps_per_s\":%.4g,"
-      "\"neighbor_builds\":%lld,\"near_builds\":%lld,%s,\"peak_rss_mb\":%.1f,"
+      "\"neighbor_builds\":%lld,\"near_builds\":%lld,%s,%s\"peak_rss_mb\":%.1f,"
       "\"state_hash\":\"%016llx\"}\n",
       system->particles().size(), awake / steps, static_cast<long long>(options.steps),
       system->num_threads(), wall, 1e3 * wall / steps, awake / wall,
       static_cast<long long>(ns.builds - before.builds),
-      static_cast<long long>(ns.near_builds - before.near_builds), phases.c_str(), PeakRssMb(),
-      static_cast<unsigned long long>(system->StateHash()));
+      static_cast<long long>(ns.near_builds - before.near_builds), phases.c_str(), arm_json.c_str(),
+      PeakRssMb(), static_cast<unsigned long long>(system->StateHash()));
   return 0;
 }
 

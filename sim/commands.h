@@ -120,11 +120,16 @@ struct BenchStepOptions {
   int64_t warm = 400;  // steps run before the timing (sleep checks settle, a rebuild or two)
   int64_t steps = 1500;
   int threads = 0;
+  // A URDF: its arm (arm::BulletArm, the lander's PID with its D term implicit, holding the
+  // lander's digging pose under a constant 20 N on the scoop) steps once per DEM step, as a
+  // coupled dig's arm does at arm.substeps 1; its time is taken apart (arm_ms_per_step).
+  std::string arm;
 };
 // `scoopsim bench step SCENE`: the cost of the scene's step from its saved bed, scoop or not (the
 // mid-dig state of bench/dig_state.py: a full-scale pass's step without running up to it). Prints
 // one JSON line (particles, awake_per_step, steps, threads, wall_s, ms_per_step,
-// awake_particle_steps_per_s, neighbor_builds, near_builds, peak_rss_mb, state_hash).
+// awake_particle_steps_per_s, neighbor_builds, near_builds, peak_rss_mb, state_hash; with --arm
+// also arm_ms_per_step, included in ms_per_step).
 int BenchStep(const BenchStepOptions& options);
 
 }  // namespace sim

@@ -28,7 +28,14 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kMaxRayleighFraction = 0.3;  // DEM practice: dt in 0.2..0.3 t_R (paper eq. 4)
-constexpr double kMaxArmStep = 1e-4;  // the arm's Bullet step [s] (arm.substeps x time_step)
+// The arm's Bullet step [s] (arm.substeps x time_step, or arm.step). With the PID's D term
+// explicit, below its bound (dt < 2 I / d, ~1.2e-4 s on j_scoop_yaw). Implicit: on a wrench table
+// at most the lander's own control step, 400 Hz (the P term stays explicit, stable to dt < 2 /
+// omega: several times that on the lander's arm); coupled to the DEM still 1e-4 s, where the
+// one-step lag of the wrench against the stiff scoop-bed contact, not the PID, is the bound
+// (journal sections 8 and 13: k dt = 7.4e-5 s already gave transients).
+constexpr double kMaxArmStepExplicitD = 1e-4;
+constexpr double kMaxArmStepImplicitD = 2.5e-3;
 
 // A double with 6 significant digits, for messages.
 std::string Num(double v) {
@@ -732,8 +739,8 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
   ArmSpec& a = scene->arm;
   a.enabled = true;
   const MapReader m(file, node, "arm",
-                    {"urdf", "base", "initial", "gains", "derate", "substeps", "timing",
-                     "velocity_margin", "faults", "wrench", "table"});
+                    {"urdf", "base", "initial", "gains", "derate", "substeps", "timing", "d_term",
+                     "step", "velocity_margin", "faults", "wrench", "table"});
   const std::string urdf_name =
       m.Has("urdf") ? m.String("urdf", "the path of a URDF file") : "../assets/lander_arm.urdf";
   a.urdf = ResolveAgainst(file, urdf_name);
@@ -843,6 +850,7 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
     else
       Fail(file, LineOf(node["timing"]), "arm.timing", "bullet_first or dem_first", t);
   }
+  a.step = m.Number("step", 0.0, "a number > 0 (s)", Positive);
   a.velocity_margin = m.Number("velocity_margin", a.velocity_margin, "a number in (0, 1]",
                                [](double v) { return v > 0 && v <= 1; });
 
@@ -901,6 +909,20 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
     Fail(file, LineOf(node["table"]), "arm.table", "a table only with arm.wrench: table",
          m.String("table", "a path"));
   }
+  // The PID's D term: implicit on a table (the step it needs), explicit coupled to the DEM
+  // unless asked (journal section 13: the boulder's fault timeline moved with it).
+  a.implicit_d = a.table_driven;
+  if (m.Has("d_term")) {
+    const std::string d = m.String("d_term", "implicit or explicit");
+    if (d == "implicit" || d == "explicit")
+      a.implicit_d = d == "implicit";
+    else
+      Fail(file, LineOf(node["d_term"]), "arm.d_term", "implicit or explicit", d);
+  }
+  if (m.Has("step") && !a.table_driven)
+    Fail(file, LineOf(node["step"]), "arm.step",
+         "a step only with arm.wrench: table (a coupled arm steps every arm.substeps DEM steps)",
+         Num(a.step));
 }
 
 void ParseSleep(const std::string& file, const YAML::Node& node, dem::SleepConfig* sleep) {
@@ -1335,15 +1357,30 @@ Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
 
   // Derived time step and default skin.
   DeriveFromBed(&scene);
-  // The PID's explicit D term bounds the arm's step (arm/controller.h: dt < 2 I / d, about
-  // 1.2e-4 s on j_scoop_yaw); keep the Bullet step, substeps DEM steps, below 1e-4 s.
-  if (scene.arm.enabled && scene.arm.substeps * scene.time_step > kMaxArmStep) {
-    Fail(path, LineOf(root["arm"]["substeps"] ? root["arm"]["substeps"] : root["arm"]),
-         "arm.substeps",
-         "an integer <= " + Int(std::floor(kMaxArmStep / scene.time_step)) +
-             " (substeps x time step <= " + Num(kMaxArmStep) + " s)",
-         std::to_string(scene.arm.substeps),
-         "the PID's explicit D term is unstable above ~1.2e-4 s on j_scoop_yaw");
+  // The arm's step: below the explicit D term's bound; on a table, at most the lander's control
+  // step; coupled, below the wrench lag's bound.
+  if (scene.arm.enabled) {
+    const bool table_step = scene.arm.table_driven && scene.arm.implicit_d;
+    const double limit = table_step ? kMaxArmStepImplicitD : kMaxArmStepExplicitD;
+    const char* why = table_step ? "the arm steps at most at the lander's control step, 400 Hz"
+                      : scene.arm.implicit_d
+                          ? "a coupled arm's wrench lags one Bullet step behind the stiff "
+                            "scoop-bed contact: transients above ~4e-5 s"
+                          : "the PID's explicit D term is unstable above ~1.2e-4 s on "
+                            "j_scoop_yaw (arm.d_term: implicit is not)";
+    if (scene.arm.step > limit) {
+      Fail(path, LineOf(root["arm"]["step"]), "arm.step",
+           "a step <= " + Num(limit) +
+               " s (arm.d_term: " + (scene.arm.implicit_d ? "implicit" : "explicit") + ")",
+           Num(scene.arm.step), why);
+    }
+    if (scene.arm.step == 0 && scene.arm.substeps * scene.time_step > limit) {
+      Fail(path, LineOf(root["arm"]["substeps"] ? root["arm"]["substeps"] : root["arm"]),
+           "arm.substeps",
+           "an integer <= " + Int(std::floor(limit / scene.time_step)) +
+               " (substeps x time step <= " + Num(limit) + " s)",
+           std::to_string(scene.arm.substeps), why);
+    }
   }
   return scene;
 }

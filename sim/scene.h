@@ -166,6 +166,11 @@ struct ArmSpec {
   std::vector<double> derate;                // effort-limit factor per joint, in (0, 1]
   int substeps = 1;                          // DEM steps per Bullet step (averaged wrench)
   CouplingTiming timing = CouplingTiming::kBulletFirst;
+  // The PID's D term (arm/controller.h): implicit (stable at any step; the default with
+  // arm.wrench: table) or explicit (the default coupled to the DEM).
+  bool implicit_d = false;
+  // The table-driven arm's Bullet step [s] (arm.step); 0: substeps x time_step, as coupled.
+  double step = 0;
   double velocity_margin = 0.9;  // the path is slowed until every joint stays below this
                                  // fraction of its velocity limit
   // Fault rules (arm/fault_monitor.h) and the reaction to torque, position and F/T limits.

@@ -109,7 +109,7 @@ TableArmResult RunTableArm(const Scene& scene, const RunOptions& options) {
   TableWrench source(scene);
   // The arm steps once per loop step: the scene's arm step as the "DEM step", one substep.
   Scene arm_scene = scene;
-  const double h = scene.arm.substeps * scene.time_step;
+  const double h = scene.arm.step > 0 ? scene.arm.step : scene.arm.substeps * scene.time_step;
   arm_scene.time_step = h;
   arm_scene.arm.substeps = 1;
   arm_scene.arm.timing = CouplingTiming::kBulletFirst;

@@ -328,6 +328,9 @@ int Main(int argc, char** argv) {
   step->add_option("--threads", step_options.threads, "Worker threads; 0 = all cores")
       ->capture_default_str()
       ->check(CLI::Range(0, kMaxThreads));
+  step->add_option("--arm", step_options.arm,
+                   "A URDF (the lander's arm): step it once per DEM step beside the bed, its "
+                   "time apart (arm_ms_per_step)");
   CLI::App* bench_render = bench->add_subcommand(
       "render",
       "Frames per second of the renderer at 1280x720, PNG writing included (one JSON line)");

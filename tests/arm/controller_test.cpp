@@ -70,6 +70,35 @@ TEST(ControllerTest, PidClosedFormAndClamp) {
   EXPECT_THROW(JointPid(m, std::vector<PidGains>(5)), std::invalid_argument);
 }
 
+// The implicit form of the same step: bias = p e + i (e dt) + d qd_ref, gain d, bounds +-effort,
+// the bound toward an exceeded velocity limit 0; demanded(v) = bias - d v equals the explicit
+// PID's output at qd = v. Exact to rounding (1e-12).
+TEST(ControllerTest, ServoClosedForm) {
+  const ArmModel& m = Lander();
+  JointPid pid(m, LanderGains()), explicit_pid(m, LanderGains());
+  Eigen::VectorXd q_ref = Eigen::VectorXd::Zero(6), qd_ref = Eigen::VectorXd::Zero(6);
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(6), qd = Eigen::VectorXd::Zero(6);
+  q_ref[1] = 0.001;
+  qd_ref[1] = 0.02;
+  qd[2] = 0.25;  // past j_prox_pitch's 0.2 rad/s: no positive torque
+  qd[4] = -0.3;  // past -0.2 on j_hand_yaw: no negative torque
+  const double dt = 1e-3;
+  JointServo servo;
+  pid.ComputeServo(q_ref, qd_ref, q, qd, dt, &servo);
+  EXPECT_NEAR(servo.bias[1], 20000 * 0.001 + 0.2 * 0.001 * dt + 150 * 0.02, 1e-12);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(servo.gain[i], kLanderGains[i].d);
+  EXPECT_EQ(servo.upper[2], 0);
+  EXPECT_EQ(servo.lower[2], -73.0);
+  EXPECT_EQ(servo.lower[4], 0);
+  EXPECT_EQ(servo.upper[4], 25.7);
+  EXPECT_EQ(servo.upper[1], 101.0);
+  Eigen::VectorXd v(6), demanded, explicit_demanded, applied;
+  v << 0.01, -0.02, 0.03, 0.0, 0.05, -0.01;
+  JointPid::Demanded(servo, v, &demanded);
+  explicit_pid.Compute(q_ref, qd_ref, q, v, dt, &explicit_demanded, &applied);
+  EXPECT_LT((demanded - explicit_demanded).cwiseAbs().maxCoeff(), 1e-12);
+}
+
 // IK from another pose reaches a reachable target: the pose of l_scoop at known angles, within
 // the tolerances asked (1e-6 m, 1e-5 rad).
 TEST(ControllerTest, IkReachesAReachablePose) {

@@ -344,6 +344,13 @@ TEST(TableArm, OutOfDomainInputsAreRefusedBeforeTheRunWithOneLineAndExit2) {
       {"missing", SceneText(table + ".missing", kHold), "arm.table"},
       {"no_surface", std::regex_replace(SceneText(table, kHold), std::regex("  surface: .*\n"), ""),
        "dig.surface"},
+      {"long_step",
+       std::regex_replace(SceneText(table, kHold), std::regex("substeps: 1"), "step: 5.0e-3"),
+       "arm.step: expected a step <= 0.0025 s (arm.d_term: implicit)"},
+      {"explicit_step",
+       std::regex_replace(SceneText(table, kHold), std::regex("substeps: 1"),
+                          "step: 1.0e-3, d_term: explicit"),
+       "arm.step: expected a step <= 0.0001 s (arm.d_term: explicit)"},
   };
   for (const Case& c : cases) {
     const std::string scene = WriteScene("bad_" + c.name, c.text);

@@ -205,6 +205,15 @@ TEST(RunDeterminismTest, StopAfterAndBenchStepOnASavedBed) {
   }
   auto hash = [](const std::string& j) { return j.substr(j.find("state_hash")); };
   EXPECT_EQ(hash(json[0]), hash(json[1]));
+  // --arm steps the lander's arm beside the bed: its time apart, the bed's state untouched.
+  const fs::path out = TempDir() / "step_arm.json";
+  ASSERT_EQ(scoopsim_test::RunScoopsim("bench step " + scene +
+                                       " --warm 5 --steps 2000 --threads 1 --arm " + kSourceDir +
+                                       "/assets/lander_arm.urdf > " + out.string()),
+            0);
+  const std::string with_arm = ReadAll(out);
+  EXPECT_NE(with_arm.find("\"arm_ms_per_step\":"), std::string::npos) << with_arm;
+  EXPECT_EQ(hash(with_arm), hash(json[0]));
 }
 
 }  // namespace
