@@ -107,11 +107,12 @@ struct SceneCommand {
     options.threads = threads_option->count() > 0 ? threads : loaded.threads;
     options.output = output;
     options.quiet = quiet;
-    options.adaptive_threads = !fixed_threads;
     return options;
   }
   sim::RunOptions Options(const sim::Scene& loaded) const {
-    return OptionsAs<sim::RunOptions>(loaded);
+    sim::RunOptions options = OptionsAs<sim::RunOptions>(loaded);
+    options.adaptive_threads = !fixed_threads;  // a study keeps its threads fixed
+    return options;
   }
 };
 
@@ -507,8 +508,7 @@ int Main(int argc, char** argv) {
 // environment. `scoopsim bench` keeps the runtime's default (spinning), as the journal's rows
 // were measured.
 void SleepingThreadsByDefault(int argc, char** argv) {
-  if (std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr)
-    return;
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr) return;
   if (argc > 1 && std::string(argv[1]) == "bench") return;
   ::setenv("OMP_WAIT_POLICY", "passive", 1);
   ::execv("/proc/self/exe", argv);  // returns only on failure: go on with the runtime's default
