@@ -9,7 +9,8 @@
 # per awake particle-step, in ns: the models move the particles differently, so the awake set
 # drifts apart over the run, and the per-particle cost is what the model changes. Prints each
 # run's JSON line, then per variant the median and range of that figure and the median and range
-# over rounds of its ratio to base's run of the same round; appends one CSV row per run to
+# over rounds of its ratio to base's run of the same round, and the same ratio for the whole step
+# (edem's 1/|w| is made in the kick, outside the force pass); appends one CSV row per run to
 # bench/results/$MACHINE/contact_law_cost.csv.
 #
 #   BASE=/tmp/scoopsim_base [NEW=build/scoopsim] bench/contact_law_cost.sh [STATE_SCENE] [THREADS]
@@ -66,15 +67,19 @@ PY
 done
 /usr/bin/python3 - "$log" <<'PY'
 import json, statistics, sys
-runs = {}
+runs, steps = {}, {}
 for l in open(sys.argv[1]):
     v, j = l.split(" ", 1)
     d = json.loads(j)
     runs.setdefault(v, []).append(d["ms_pairs"] * 1e6 / d["awake_per_step"])
+    steps.setdefault(v, []).append(d["ms_per_step"] * 1e6 / d["awake_per_step"])
 for v, xs in runs.items():
     ratios = [x / b for x, b in zip(xs, runs["base"])]
+    step_ratios = [x / b for x, b in zip(steps[v], steps["base"])]
     print(f"{v:7s} ns/awake particle-step median {statistics.median(xs):.1f}"
           f" range {min(xs):.1f}-{max(xs):.1f}"
           f"  ratio to base: median {statistics.median(ratios):.3f}"
-          f" range {min(ratios):.3f}-{max(ratios):.3f}")
+          f" range {min(ratios):.3f}-{max(ratios):.3f}"
+          f"; whole step: median {statistics.median(step_ratios):.3f}"
+          f" range {min(step_ratios):.3f}-{max(step_ratios):.3f}")
 PY

@@ -400,12 +400,16 @@ void SlabPlaneForces(const PassArrays& a, const Workspace& m, int s, Vec3* plane
   }
 }
 
-// Each particle's 1/|w| (0 when w = 0), for the edem rolling torque. Made for every particle when
-// the storage changed (stale.spins), sleeping is off, or the list of the awake ones is stale; else
-// for the awake ones only: a sleeper's spin is zero, and so is its entry (zeroed with the spin
-// when it fell asleep, UpdateSleep).
+// Each particle's 1/|w| (0 when w = 0), for the edem rolling torque, unless KickDrift made them
+// this step. Made for every particle when the storage changed (stale.spins), sleeping is off, or
+// the list of the awake ones is stale; else for the awake ones only: a sleeper's spin is zero,
+// and so is its entry (zeroed with the spin when it fell asleep, UpdateSleep).
 void UpdateInvSpins(Workspace& m, const Particles& p, bool sleeping, int nt) {
   const int64_t n = static_cast<int64_t>(p.size());
+  // KickDrift made them for the particles it moved, which are the awake ones (and all without
+  // sleeping) unless the list of those or the storage changed since.
+  if (m.inv_spin_kicked && !m.stale.spins && !m.stale.active && m.inv_spin.size() == p.size())
+    return;
   const bool all = !sleeping || m.stale.spins || m.stale.active || m.inv_spin.size() != p.size();
   if (m.inv_spin.size() != p.size()) m.inv_spin.resize(n);
   double* inv_spin = m.inv_spin.data();
@@ -490,6 +494,8 @@ void ComputeForces(Workspace& m, Particles& p, const SystemConfig& config, int n
     UpdateInvSpins(m, p, compact, nt);
     arrays.inv_spin = m.inv_spin.data();
   }
+  m.want_inv_spin = arrays.own_spins;
+  m.inv_spin_kicked = false;
   if (m.batches.size() < static_cast<size_t>(nt)) m.batches.resize(nt);
 
 #pragma omp parallel num_threads(nt)

@@ -32,12 +32,20 @@ double KickDrift(Workspace& m, Particles& p, const SystemConfig& config, int nt)
   const bool alike = m.AlikeNow();
   const double alike_mass = m.alike.mass, alike_inv_mass = m.alike.inv_mass,
                alike_inv_inertia = m.alike.inv_inertia;
+  // 1/|w| of each moved particle for the edem rolling torque (Workspace::inv_spin), while w is
+  // at hand.
+  double* inv_spin = m.want_inv_spin && m.inv_spin.size() == p.size() ? m.inv_spin.data() : nullptr;
+  m.inv_spin_kicked = inv_spin != nullptr;
   double max_v2 = 0;
 #pragma omp parallel for schedule(static) num_threads(nt) reduction(max : max_v2)
   for (int64_t a = 0; a < n_moving; ++a) {
     const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
     v[i] += (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
     w[i] += (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
+    if (inv_spin != nullptr) {
+      const double s = Norm(w[i]);
+      inv_spin[i] = s > 0.0 ? 1.0 / s : 0.0;
+    }
     x[i] += dt * v[i];
     max_v2 = std::max(max_v2, Norm2(v[i]));
     // Start this step's force with gravity (contacts add to it in ComputeForces).

@@ -212,6 +212,12 @@ struct Workspace {
   // for the awake particles before each force pass, zeroed when a particle falls asleep (its spin
   // with it), so that the pair kernel takes no square root for it.
   std::vector<double> inv_spin;
+  // KickDrift makes inv_spin for the particles it moves (want_inv_spin: some pair rolls by
+  // edem), so that the force pass need not walk them again; inv_spin_kicked says it did this
+  // step and no one moved a spin since (clumps place their spheres after it: System::Step clears
+  // it then). Read and cleared by the force pass.
+  bool want_inv_spin = false;
+  bool inv_spin_kicked = false;
 
   // Contact history to apply at the next build (a restored state, removed particles).
   std::vector<ContactRecord> pending;
