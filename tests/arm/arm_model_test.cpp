@@ -3,12 +3,13 @@
 #include "arm/arm_model.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+
+#include "tests/cli_util.h"
 
 namespace arm {
 namespace {
@@ -36,9 +37,7 @@ std::string Edited(const std::string& from, const std::string& to) {
 
 // Writes `text` to a temporary .urdf and returns its path.
 std::string WriteTemp(const std::string& name, const std::string& text) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("scoopsim_arm_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  static const std::filesystem::path dir = scoopsim_test::ProcessTempDir("arm");
   const std::string path = (dir / name).string();
   std::ofstream(path) << text;
   return path;

@@ -6,15 +6,23 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
 #include "dem/system.h"
 #include "sim/commands.h"
 #include "sim/scene.h"
+#include "tests/cli_util.h"
 
 namespace sim {
 namespace {
+
+// This process's folder for the files the tests write (scoopsim_test::ProcessTempDir).
+std::filesystem::path TempDir() {
+  static const std::filesystem::path dir = scoopsim_test::ProcessTempDir("dig");
+  return dir;
+}
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -228,7 +236,7 @@ DigSummary TinyDig(const std::string& material, double bite, const std::string& 
       scene.rayleigh_fraction * dem::RayleighTimeStep(scene.bed.radius_min, scene.materials[bed]);
   DigSummary summary;
   RunOptions options;
-  options.output = ::testing::TempDir() + out;
+  options.output = (TempDir() / out).string();
   options.quiet = true;
   options.threads = 2;
   options.dig_summary = &summary;
@@ -343,7 +351,7 @@ sleep: {enabled: true}
     SCOPED_TRACE(c.to);
     std::string text = good;
     text.replace(text.find(c.from), std::string(c.from).size(), c.to);
-    const std::string path = ::testing::TempDir() + "bad_dig.yaml";
+    const std::string path = (TempDir() / "bad_dig.yaml").string();
     {
       std::ofstream f(path);
       f << text;

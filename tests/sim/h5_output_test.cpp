@@ -30,25 +30,20 @@
 #include "sim/bed_io.h"
 #include "sim/internal_h5.h"
 #include "sim/scene.h"
+#include "tests/cli_util.h"
 
 namespace sim {
 namespace {
 
 namespace fs = std::filesystem;
 
-// A fresh folder per test under the system temp dir, removed afterwards.
+// A fresh folder per test (scoopsim_test::ProcessTempDir).
 class H5Test : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("scoopsim_h5_test_" + std::to_string(::getpid()) + "_" +
-                                        info->test_suite_name() + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
+    dir_ = scoopsim_test::ProcessTempDir(std::string("h5_test_") + info->test_suite_name() + "_" +
+                                         info->name());
   }
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   fs::path dir_;
@@ -646,7 +641,7 @@ TEST_F(H5Test, SecondWriterIsRefused) {
   EXPECT_EQ(ReadDoubles(file.get(), "/series/t"), (std::vector<double>{1, 1}));
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1)
       << "no temporary file left beside it";  // run.h5 only (no snapshot, no sidecar)
-  H5Output again(path, "scene", "v");  // free once closed
+  H5Output again(path, "scene", "v");         // free once closed
 }
 
 // A write that fails (here the file size limit, RLIMIT_FSIZE, as a full disk would) throws

@@ -2,7 +2,6 @@
 #include "sim/mesh_io.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +10,7 @@
 #include <string>
 
 #include "sim/scene.h"
+#include "tests/cli_util.h"
 
 namespace sim {
 namespace {
@@ -33,26 +33,9 @@ Bounds BoundsOf(const dem::TriangleMesh& m) {
   return b;
 }
 
-// A fresh folder per test process under the system temp dir, removed when the process exits.
-class TempFolder {
- public:
-  TempFolder()
-      : path_(fs::temp_directory_path() / ("scoopsim_mesh_io_" + std::to_string(::getpid()))) {
-    fs::create_directories(path_);
-  }
-  ~TempFolder() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
-
-const fs::path& TempDir() {
-  static TempFolder folder;
-  return folder.path();
+fs::path TempDir() {
+  static const fs::path dir = scoopsim_test::ProcessTempDir("mesh_io");
+  return dir;
 }
 
 std::string ErrorOf(const std::string& path, double scale = 1.0) {

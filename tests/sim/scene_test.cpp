@@ -19,6 +19,7 @@
 #include "dem/mesh.h"
 #include "sim/mesh_io.h"
 #include "sim/trajectory.h"
+#include "tests/cli_util.h"
 
 namespace sim {
 namespace {
@@ -31,28 +32,9 @@ double RayleighClosedForm(double radius, double density, double shear_modulus, d
   return kPi * radius * std::sqrt(density / shear_modulus) / (0.1631 * poisson + 0.8766);
 }
 
-// A fresh folder per test process under the system temp dir, removed when the process exits.
-class TempFolder {
- public:
-  TempFolder()
-      : path_(std::filesystem::temp_directory_path() /
-              ("scoopsim_scene_test_" + std::to_string(::getpid()))) {
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempFolder() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
 std::filesystem::path TempDir() {
-  static const TempFolder folder;
-  return folder.path();
+  static const std::filesystem::path dir = scoopsim_test::ProcessTempDir("scene_test");
+  return dir;
 }
 
 std::string WriteFile(const std::string& name, const std::string& text) {

@@ -5,13 +5,14 @@ import filecmp
 import os
 import subprocess
 import sys
-import tempfile
+
+from cli_check import test_dir
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 
 def main():
-    with tempfile.TemporaryDirectory() as out:
+    with test_dir("make_scoop") as out:
         subprocess.run([sys.executable, os.path.join(ROOT, "tools", "make_scoop.py"),
                         "--out-dir", out], check=True)
         failed = [name for name in ("scoop.stl", "scoop.obj")

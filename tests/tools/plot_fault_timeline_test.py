@@ -8,11 +8,10 @@ gives one line and exit status 2."""
 import os
 import subprocess
 import sys
-import tempfile
 
 import h5py
 import numpy as np
-from cli_check import expect_refused
+from cli_check import expect_refused, test_dir
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 SCRIPT = os.path.join(ROOT, "tools", "plot_fault_timeline.py")
@@ -43,7 +42,7 @@ def run(args):
 
 
 def main():
-    with tempfile.TemporaryDirectory() as d:
+    with test_dir("plot_fault_timeline") as d:
         fault, calm = os.path.join(d, "fault.h5"), os.path.join(d, "calm.h5")
         make_run(fault)
         make_run(calm, fault=False)

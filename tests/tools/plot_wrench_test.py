@@ -6,11 +6,10 @@ missing dataset or file gives one line and exit status 2."""
 import os
 import subprocess
 import sys
-import tempfile
 
 import h5py
 import numpy as np
-from cli_check import expect_refused
+from cli_check import expect_refused, test_dir
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 SCRIPT = os.path.join(ROOT, "tools", "plot_wrench.py")
@@ -91,7 +90,7 @@ def check_png(result, path, what):
 
 
 def main():
-    with tempfile.TemporaryDirectory() as d:
+    with test_dir("plot_wrench") as d:
         a, b = os.path.join(d, "ice_bd15.h5"), os.path.join(d, "snow_bd15.h5")
         make_run(a, seed=1)
         make_run(b, passes=3, seed=2)

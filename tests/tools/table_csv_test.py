@@ -14,10 +14,11 @@ import json
 import os
 import subprocess
 import sys
-import tempfile
 
 import h5py
 import numpy as np
+
+from cli_check import test_dir
 
 LANDER_COLUMNS = ["m", "d", "p", "rho", "Fx", "Fy", "Fz", "Tx", "Ty", "Tz"]
 
@@ -47,7 +48,7 @@ def write_case(path, material, bite, passes=2, rows=60, seed=0):
 
 def main():
     scoopsim = sys.argv[1]
-    with tempfile.TemporaryDirectory() as tmp:
+    with test_dir("table_csv") as tmp:
         os.makedirs(os.path.join(tmp, "cases"))
         for k, (material, bite) in enumerate(
                 [("snow", 0.015), ("snow", 0.003), ("ice", 0.009), ("ice", 0.015)]):

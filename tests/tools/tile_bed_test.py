@@ -10,10 +10,11 @@ mirror closed form), keeps wall contacts only on outer walls, and writes a bed s
 import os
 import subprocess
 import sys
-import tempfile
 
 import h5py
 import numpy as np
+
+from cli_check import test_dir
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 SCRIPT = os.path.join(ROOT, "tools", "tile_bed.py")
@@ -59,7 +60,7 @@ def make_bed(path):
 
 
 def main():
-    with tempfile.TemporaryDirectory() as tmp:
+    with test_dir("tile_bed") as tmp:
         small, big = os.path.join(tmp, "small.h5"), os.path.join(tmp, "big.h5")
         n = make_bed(small)
         r = subprocess.run([sys.executable, SCRIPT, small, "--box", "0", "0", repr(LX), repr(LY),

@@ -13,11 +13,12 @@ import os
 import re
 import subprocess
 import sys
-import tempfile
 import xml.etree.ElementTree as ET
 
 import h5py
 import numpy as np
+
+from cli_check import test_dir
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 TYPES = {("Float", "8"): np.float64, ("Int", "8"): np.int64, ("Int", "4"): np.int32}
@@ -54,7 +55,7 @@ def data_item(item, h5, h5_name):
 
 def main():
     binary = sys.argv[1]
-    with tempfile.TemporaryDirectory() as d:
+    with test_dir("xdmf") as d:
         scene = os.path.join(d, "boulder.yaml")
         with open(scene, "w") as f:
             f.write(scene_text(os.path.join(ROOT, "scenes", "fault")))
