@@ -11,9 +11,6 @@ bash tools/install-deps.sh
 cmake --preset release >/dev/null
 cmake --build build -j"$(nproc)" --target scoopsim
 
-# Idle OpenMP threads sleep instead of spinning: on a busy machine spinning barriers slow the
-# run down tens of times.
-export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
 mkdir -p out
 build/scoopsim run scenes/quick_dig.yaml -o out/quick_dig.h5 --frames out/quick_dig_frames
 /usr/bin/python3 tools/plot_wrench.py out/quick_dig.h5 -o out/quick_dig_wrench.png
