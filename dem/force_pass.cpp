@@ -194,8 +194,8 @@ struct PassArrays {
   const double *radius, *mass, *inv_mass, *inv_inertia;
   const int32_t* mat;
   const uint8_t* awake;
-  const int32_t* busy;     // the visited particles with sleeping (compact)
-  const double* inv_spin;  // with own spins: each particle's 1/|w| (Workspace::inv_spin)
+  const int32_t* busy;               // the visited particles with sleeping (compact)
+  const double* inv_spin = nullptr;  // with own spins: 1/|w| of each (Workspace::inv_spin)
   // The near list (Workspace::near_k): each slot's partner and history.
   const int32_t *near_j, *near_off, *near_count;
   Vec3* shear;
@@ -419,8 +419,7 @@ void UpdateInvSpins(Workspace& m, const Particles& p, bool sleeping, int nt) {
 #pragma omp parallel for schedule(static) num_threads(nt)
   for (int64_t a = 0; a < count; ++a) {
     const int64_t i = all ? a : active[a];
-    const double s = Norm(w[i]);
-    inv_spin[i] = s > 0.0 ? 1.0 / s : 0.0;
+    inv_spin[i] = InvNorm(w[i]);
   }
   m.stale.spins = false;
 }
@@ -439,7 +438,6 @@ PassArrays TakeArrays(Workspace& m, Particles& p, const SystemConfig& config, in
   a.mat = p.material.data();
   a.awake = p.awake.data();
   a.busy = m.busy.data();
-  a.inv_spin = m.inv_spin.data();
   a.near_j = m.near_j.data();
   a.near_off = m.near_off.data();
   a.near_count = m.near_count.data();

@@ -42,10 +42,7 @@ double KickDrift(Workspace& m, Particles& p, const SystemConfig& config, int nt)
     const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
     v[i] += (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
     w[i] += (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
-    if (inv_spin != nullptr) {
-      const double s = Norm(w[i]);
-      inv_spin[i] = s > 0.0 ? 1.0 / s : 0.0;
-    }
+    if (inv_spin != nullptr) inv_spin[i] = InvNorm(w[i]);
     x[i] += dt * v[i];
     max_v2 = std::max(max_v2, Norm2(v[i]));
     // Start this step's force with gravity (contacts add to it in ComputeForces).

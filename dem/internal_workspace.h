@@ -209,8 +209,9 @@ struct Workspace {
 
   std::vector<ContactBatch> batches;  // one per thread
   // Each particle's 1/|w| (0 when w = 0) when some pair rolls by the edem model [s/rad] (N): made
-  // for the awake particles before each force pass, zeroed when a particle falls asleep (its spin
-  // with it), so that the pair kernel takes no square root for it.
+  // for the moving particles by KickDrift (or by the force pass, UpdateInvSpins, when that could
+  // not), zeroed when a particle falls asleep (its spin with it), so that the pair kernel takes
+  // no square root for it.
   std::vector<double> inv_spin;
   // KickDrift makes inv_spin for the particles it moves (want_inv_spin: some pair rolls by
   // edem), so that the force pass need not walk them again; inv_spin_kicked says it did this

@@ -42,6 +42,11 @@ inline Vec3 Cross(const Vec3& a, const Vec3& b) {
 }
 inline double Norm2(const Vec3& a) { return Dot(a, a); }
 inline double Norm(const Vec3& a) { return std::sqrt(Dot(a, a)); }
+// 1/|a|, and 0 for a = 0 (e.g. a particle at rest: no direction to act against).
+inline double InvNorm(const Vec3& a) {
+  const double s = Norm(a);
+  return s > 0.0 ? 1.0 / s : 0.0;
+}
 inline bool IsFinite(const Vec3& a) {
   return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
