@@ -26,6 +26,19 @@ using h5::Handle;
 const char* const kLinkedFields[] = {"id",     "position", "velocity", "angular_velocity",
                                      "radius", "material"};
 
+// The last step's force or torque (N) for the file, zero where `flag` (N) is `asleep_value`. A
+// sleeper's force is not kept while it sleeps (awake neighbours add to it and nothing clears
+// it), and a bed loads all awake: it must start as a waking body does, at rest in equilibrium
+// with zero force (dem::internal::WakeAll, ClumpSet::BeginStep), not kick on a stale sum.
+template <typename Flag>
+std::vector<dem::Vec3> AwakeOnly(const std::vector<dem::Vec3>& field, const std::vector<Flag>& flag,
+                                 int asleep_value) {
+  std::vector<dem::Vec3> out = field;
+  for (size_t i = 0; i < out.size() && i < flag.size(); ++i)
+    if (flag[i] == asleep_value) out[i] = dem::Vec3{};
+  return out;
+}
+
 void WriteVectors(hid_t group, const char* name, const std::vector<dem::Vec3>& field,
                   const std::vector<size_t>& order) {
   std::vector<double> buffer(3 * order.size());
@@ -101,8 +114,8 @@ void WriteClumps(hid_t file, const dem::System& system) {
   for (size_t k = 0; k < n; ++k) w[k] = c.AngularVelocity(k);
   WriteClumpVectors(group.get(), "angular_velocity", w);
   WriteClumpVectors(group.get(), "angular_momentum", c.l);
-  WriteClumpVectors(group.get(), "force", c.f);
-  WriteClumpVectors(group.get(), "torque", c.t);
+  WriteClumpVectors(group.get(), "force", AwakeOnly(c.f, c.asleep, 1));
+  WriteClumpVectors(group.get(), "torque", AwakeOnly(c.t, c.asleep, 1));
   h5::WriteArray(group.get(), "member", H5T_STD_I64LE, H5T_NATIVE_INT64, c.member.data(),
                  c.member.size(), 1);
 }
@@ -138,8 +151,8 @@ h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& syste
             "H5Lcreate_hard " + target);
   }
   const std::vector<size_t> order = h5::IdOrder(p);
-  WriteVectors(particles.get(), "force", p.f, order);
-  WriteVectors(particles.get(), "torque", p.t, order);
+  WriteVectors(particles.get(), "force", AwakeOnly(p.f, p.awake, 0), order);
+  WriteVectors(particles.get(), "torque", AwakeOnly(p.t, p.awake, 0), order);
 
   std::vector<std::string> names;
   for (int i = 0; i < system.materials().size(); ++i) names.push_back(system.materials()[i].name);

@@ -8,7 +8,8 @@
 //   /particles/        id int64 (N), position, velocity, angular_velocity (N x 3), radius (N),
 //                      material int32 (N, index into /materials/names): hard links to the
 //                      snapshot's datasets; force [N], torque [N m] (N x 3): the last step's,
-//                      which velocity Verlet's first half kick uses
+//                      which velocity Verlet's first half kick uses (zero for a particle or
+//                      clump that sleeps: it loads awake, at rest in equilibrium)
 //   /materials/names   material names (string list, index = material id at save time)
 //   /contacts/         a, b int64 (M), shear (M x 3) [m]: System::Contacts(); b < 0 is plane -1-b
 //   Optional: /particles/awake uint8 (N): 0 for a particle that sleeps (dem::SleepConfig; it

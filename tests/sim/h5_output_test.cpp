@@ -897,6 +897,47 @@ TEST_F(H5Test, BedLoadRestoresSleepingParticles) {
   }
 }
 
+// A sleeper's force is not kept while it sleeps: awake neighbours add to it and nothing clears it
+// (dem/force_pass.cpp). A bed saved mid-dig loads all awake, so SaveBed writes a sleeper's force
+// and torque as zero, as a waking particle's (dem::internal::WakeAll): a stale sum of 105 N on a
+// 0.16 g sphere (the lookup sweep's bed after pass 1) kicked it 0.5 mm in two steps. The awake
+// particles' forces are saved as they are, bit for bit.
+TEST_F(H5Test, BedSavesASleepersForceAsZero) {
+  const std::string path = Path("sleeping_bed2.h5");
+  {
+    dem::System saved(OneMaterial(), SmallConfig());
+    FillSmallBed(&saved);
+    SaveBed(path, saved, "");
+    Handle file = OpenFile(path, H5F_ACC_RDWR);
+    Handle particles(H5Gopen2(file.get(), "/particles", H5P_DEFAULT), H5Gclose);
+    const uint8_t awake[3] = {1, 1, 0};  // particle 2 sleeps
+    h5::WriteArray(particles.get(), "awake", H5T_STD_U8LE, H5T_NATIVE_UINT8, awake, 3, 1);
+  }
+  dem::System sleeping(OneMaterial(), SmallConfig());
+  LoadBed(path, &sleeping);
+  dem::Particles& p = sleeping.mutable_particles();
+  for (size_t i = 0; i < p.size(); ++i) {
+    p.f[i] = dem::Vec3{1.0 + p.id[i], -2.0, 3.0};  // a sleeper's: stale
+    p.t[i] = dem::Vec3{0.5, 0.25 * p.id[i], -1.0};
+  }
+  const std::string resaved = Path("sleeping_bed2_resaved.h5");
+  SaveBed(resaved, sleeping, "");
+  dem::System loaded(OneMaterial(), SmallConfig());
+  LoadBed(resaved, &loaded);
+  const dem::Particles& q = loaded.particles();
+  ASSERT_EQ(q.size(), 3u);
+  for (size_t i = 0; i < q.size(); ++i) {
+    EXPECT_NE(q.awake[i], 0) << "id " << q.id[i];  // SaveBed keeps no sleep flags
+    if (q.id[i] == 2) {
+      ExpectSameVec(q.f[i], dem::Vec3{});
+      ExpectSameVec(q.t[i], dem::Vec3{});
+    } else {
+      ExpectSameVec(q.f[i], dem::Vec3{1.0 + q.id[i], -2.0, 3.0});
+      ExpectSameVec(q.t[i], dem::Vec3{0.5, 0.25 * q.id[i], -1.0});
+    }
+  }
+}
+
 // Each broken bed is refused with an InputError naming the file and the offending dataset:
 // missing file; a material the system lacks; a missing dataset; a dataset of the wrong shape.
 TEST_F(H5Test, BedLoadErrorsNameFileAndDataset) {
