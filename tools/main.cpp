@@ -79,7 +79,9 @@ struct SceneCommand {
   CLI::Option* scene_option = nullptr;
   CLI::Option* output_option = nullptr;
 
-  void AddTo(CLI::App* command, const std::string& default_output) {
+  // `governed`: the command steps one world under the thread governor (`bed`, `run`), so it
+  // offers --fixed-threads; the studies keep their threads fixed and do not.
+  void AddTo(CLI::App* command, const std::string& default_output, bool governed) {
     output = default_output;
     scene_option =
         command->add_option("SCENE", scene, "Scene file (YAML), e.g. scenes/default.yaml")
@@ -93,10 +95,12 @@ struct SceneCommand {
                          "Worker threads; 0 = all cores (default: the scene's `threads`, else 0)")
             ->check(CLI::Range(0, kMaxThreads));
     command->add_flag("-q,--quiet", quiet, "No progress output");
-    command->add_flag("--fixed-threads", fixed_threads,
-                      "Use exactly --threads workers every step (default: fewer while timing "
-                      "shows fewer faster, as when another process holds a core; results are "
-                      "the same)");
+    if (governed) {
+      command->add_flag("--fixed-threads", fixed_threads,
+                        "Use exactly --threads workers every step (default: fewer while timing "
+                        "shows fewer faster, as when another process holds a core; results are "
+                        "the same)");
+    }
   }
 
   // The scene, and run options where the command line overrides the scene (a study's options
@@ -210,12 +214,12 @@ int Main(int argc, char** argv) {
 
   SceneCommand bed_args;
   CLI::App* bed = app.add_subcommand("bed", "Fill the scene's box, settle the bed and save it");
-  bed_args.AddTo(bed, "out/bed.h5");
+  bed_args.AddTo(bed, "out/bed.h5", true);
 
   SceneCommand run_args;
   CLI::App* run = app.add_subcommand(
       "run", "Run a scene for its duration (loads bed.file, or makes the bed first)");
-  run_args.AddTo(run, "out/run.h5");
+  run_args.AddTo(run, "out/run.h5", true);
   double run_stop_after = 0;
   run->add_option("--stop-after", run_stop_after,
                   "Stop after this many simulated seconds, the output closed as on SIGINT "
@@ -263,7 +267,7 @@ int Main(int argc, char** argv) {
   auto add_study = [study](SceneCommand* args, const char* name, const char* help,
                            const char* output) {
     CLI::App* command = study->add_subcommand(name, help);
-    args->AddTo(command, output);
+    args->AddTo(command, output, false);
     return command;
   };
   SceneCommand shape_args;

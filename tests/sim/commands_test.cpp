@@ -222,6 +222,20 @@ TEST(ShapeStudyTest, UnknownTemplateIsBadInput) {
       << text.str();
 }
 
+// A study keeps its threads fixed, so it does not offer the governor's --fixed-threads: CLI11
+// refuses the unknown flag with exit 2 (only `bed` and `run` take it, tests/sim/world_test.cpp).
+TEST(ShapeStudyTest, FixedThreadsIsNotAStudyOption) {
+  const std::string scene = WriteScene();
+  const std::string log = (TempDir() / "fixed.log").string();
+  EXPECT_EQ(scoopsim_test::RunScoopsim("study shape " + scene + " -o " +
+                                           (TempDir() / "x.h5").string() + " --fixed-threads -q",
+                                       log),
+            2);
+  std::stringstream text;
+  text << std::ifstream(log).rdbuf();
+  EXPECT_NE(text.str().find("--fixed-threads"), std::string::npos) << text.str();
+}
+
 // The tool pushed with its bottom 12 mm under the surface through ~500 sand spheres of 2.5 mm (a
 // bed ~24 mm deep: deep enough for the solid fraction's box, 6 radii).
 std::string WriteSphereScene() {
