@@ -23,8 +23,10 @@ DIR's layout (tools/report.sh makes the figures that come from other files, then
                              table.h5, cases/), and tools/plot_lookup.py's lookup_fig9.png,
                              lookup_fig10.png, lookup_fig11.png, lookup_trends.csv
   DIR/commands.txt           optional: lines `KEY: COMMAND` (KEY shape, size, balovnev, testbed
-                             or lookup; several lines a key allowed) shown instead of the
-                             section's default command, e.g. the scene actually used
+                             or lookup; several lines a key allowed) shown as the section's
+                             command, e.g. the scene actually used
+A section's command: DIR/commands.txt's, else the one its files record (size_study.csv's and
+the Balovnev CSV's first '#' line name the scene), else the layout's default above.
 Exit status: 0 written (sections not run included); 2 bad input. Needs python3-numpy and
 python3-h5py.
 """
@@ -108,15 +110,17 @@ class Report:
     def __init__(self, root, commands):
         self.root = root
         self.commands = commands
+        self.recorded = {}  # {key: [command]}: what the section's own files say made them
         self.sections = []  # (key, title, status, html)
         self.figures = []   # (section key, file path relative to root, caption)
 
     def path(self, *parts):
         return os.path.join(self.root, *parts)
 
-    def command_block(self, key):
-        lines = self.commands.get(key) or [c.replace("DIR", self.root) for c in COMMANDS[key]]
-        return "<p>Made by:</p><pre>%s</pre>" % esc("\n".join(lines))
+    def command_lines(self, key):
+        """DIR/commands.txt's lines for `key`, else what its files record, else the default."""
+        return (self.commands.get(key) or self.recorded.get(key) or
+                [c.replace("DIR", self.root) for c in COMMANDS[key]])
 
     def figure(self, key, rel, caption):
         """An embedded PNG, or a visible note when the file is missing."""
@@ -140,12 +144,12 @@ class Report:
         """A section: body is its HTML, or None when it was not run."""
         if body is None:
             status = "not run"
-            body = ('<div class="notrun">Not run: %s</div>'
-                    % esc(" && ".join(self.commands.get(key) or
-                                      [c.replace("DIR", self.root) for c in COMMANDS[key]])))
+            body = '<div class="notrun">Not run: %s</div>' % esc(" && ".join(
+                self.command_lines(key)))
         else:
             status = "shown"
-            body = self.command_block(key) + body
+            body = "<p>Made by:</p><pre>%s</pre>%s" % (esc("\n".join(self.command_lines(key))),
+                                                       body)
         self.sections.append((key, title, status, body))
 
     def html(self):
@@ -262,18 +266,27 @@ def size_section(rep):
             "the maximum percent error of each size's peak against the finest (eq. 6) for force "
             "and torque, mean over beds (min .. max over beds); the largest size within 20% "
             "(eq. 7).</p>")
+    made = [re.match(r"scoopsim study particle-size (\S+)", n) for n in notes]
+    made = [m.group(1) for m in made if m]
+    if made:
+        rep.recorded["size"] = ["build/scoopsim study particle-size %s -o %s"
+                                % (made[0], rep.path("size"))]
+    # `# verdict: largest_within_20pct_mm=<d>` (bed means) and `# verdict_spread:
+    # largest_within_20pct_all_beds_mm=<d>` (every bed), each against the study's 3.5 mm.
     verdicts = [n for n in notes if n.lower().startswith("verdict")]
     for v in verdicts:
-        m = re.search(r"largest_within_20pct_mm\s*=\s*([^\s,;]+)", v)
+        m = re.search(r"largest_within_20pct\w*_mm\s*=\s*([^\s,;]+)", v)
         text = esc(v)
-        if m:
-            try:
-                d = float(m.group(1))
-                cmp = ("coarser than" if d > STUDY_SIZE_MM else
-                       "finer than" if d < STUDY_SIZE_MM else "the same as")
-                text += " &mdash; %g mm, %s the study's %g mm" % (d, cmp, STUDY_SIZE_MM)
-            except ValueError:
-                text += " &mdash; the study: %g mm" % STUDY_SIZE_MM
+        try:
+            d = float(m.group(1)) if m else float("nan")
+        except ValueError:
+            d = float("nan")
+        if np.isfinite(d):
+            cmp = ("coarser than" if d > STUDY_SIZE_MM else
+                   "finer than" if d < STUDY_SIZE_MM else "the same as")
+            text += " &mdash; %g mm, %s the study's %g mm" % (d, cmp, STUDY_SIZE_MM)
+        else:
+            text += " &mdash; the study: %g mm" % STUDY_SIZE_MM
         body += '<div class="verdict">%s</div>' % text
     if not verdicts:
         body += '<p class="missing">No `# verdict:` line in %s.</p>' % esc(path)
@@ -329,6 +342,11 @@ def balovnev_section(rep):
         d, notes = plot_balovnev.read(path)
     except ValueError as e:
         raise InputError(str(e))
+    made = [re.match(r"scoopsim study balovnev: (\S+); dig (\S+)", n) for n in notes]
+    made = [m for m in made if m]
+    if made:
+        rep.recorded["balovnev"] = ["build/scoopsim study balovnev %s -o %s"
+                                    % (made[0].group(1), made[0].group(2))]
     rows = balovnev_spans(d)
     body = ("<p>The dig's horizontal force (against the motion) and vertical force (downward on "
             "the scoop) against Balovnev's model evaluated at the blade tip's depth below the "

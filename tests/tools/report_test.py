@@ -6,7 +6,8 @@ Balovnev CSV and PNG, a testbed summary and PNG, and a synthetic wrench table (p
 report.sh draws the lookup figures and trends). Checks:
   - the page lists 9 figures and embeds each as a data URI whose bytes are the file's; every src
     is a data URI (nothing fetched);
-  - the shape table's numbers, the size verdict against the study's 3.5 mm (4 mm: coarser), the
+  - the shape table's numbers, the size verdicts against the study's 3.5 mm (4 mm: coarser; with
+    the spread 2 mm: finer) and the command the CSV records (its scene), the
     Balovnev table's last row (the mean over the rows that cut: dem_horizontal = time, cut for
     time in [0.2, 0.8) at 0.02 s -> mean 0.49 exactly) and 10 span rows, the lookup ratio (10);
   - headless Chromium loads the page and every <img> has naturalWidth > 0 (an inline script added
@@ -72,7 +73,9 @@ def write_shape(path):
 
 def write_size(d):
     with open(os.path.join(d, "size_study.csv"), "w") as f:
-        f.write("# scene: scenes/paper/size_S10.yaml\n# verdict: largest_within_20pct_mm=4\n"
+        f.write("# scoopsim study particle-size scenes/paper/size_S2.yaml (scoopsim 0.1.0): paper "
+                "section 4, eq. 5-7\n# verdict: largest_within_20pct_mm=4\n"
+                "# verdict_spread: largest_within_20pct_all_beds_mm=2\n"
                 "size_mm,beds,peak_force_mean,peak_force_min,peak_force_max,mpe_force_pct,"
                 "mpe_force_min_pct,mpe_force_max_pct,peak_torque_mean,peak_torque_min,"
                 "peak_torque_max,mpe_torque_pct,mpe_torque_min_pct,mpe_torque_max_pct,within_20,"
@@ -170,8 +173,11 @@ def main():
             page = f.read()
         check_embedded(page, root)
         assert "<td>tetra4</td>" in page.replace(' class="l"', "") and "40.25" in page
-        assert "coarser than the study&#x27;s 3.5 mm" in page or \
-            "coarser than the study's 3.5 mm" in page, "the size verdict"
+        size = page[page.index('id="size"'):page.index('id="balovnev"')]
+        assert "largest_within_20pct_mm=4 &mdash; 4 mm, coarser than the study" in size, size
+        assert "all_beds_mm=2 &mdash; 2 mm, finer than the study" in size, size
+        assert "<pre>build/scoopsim study particle-size scenes/paper/size_S2.yaml -o " + \
+            os.path.join(root, "size") + "</pre>" in size, "the recorded command"
         bal = page[page.index('id="balovnev"'):page.index('id="testbed"')]
         rows = re.findall(r"<tr>(.*?)</tr>", bal)
         assert len(rows) == 1 + 10 + 1, len(rows)
