@@ -402,6 +402,8 @@ def lookup_section(rep):
     trends = rep.path("lookup", "lookup_trends.csv")
     figs = [os.path.join("lookup", "lookup_fig%d.png" % k) for k in (9, 10, 11)]
     if not os.path.isfile(trends) and not any(os.path.isfile(rep.path(f)) for f in figs):
+        if os.path.isfile(rep.path("lookup", "table.h5")):  # the sweep ran: only the figures not
+            rep.recorded["lookup"] = [COMMANDS["lookup"][1].replace("DIR", rep.root)]
         return None
     body = ("<p>The lookup set (paper Table 4-5) from the wrench table: force and torque "
             "against rho (the scoop CoM's travel along the trench since first contact), the "

@@ -16,14 +16,20 @@ fi
 dir=$1
 out=${2:-$dir/report.html}
 py=/usr/bin/python3
-stale() {  # stale OUT IN: OUT is missing or older than IN
-  [ ! -f "$1" ] || [ "$2" -nt "$1" ]
+stale() {  # stale IN OUT...: an OUT is missing or older than IN
+  local in=$1 out
+  shift
+  for out in "$@"; do
+    if [ ! -f "$out" ] || [ "$in" -nt "$out" ]; then return 0; fi
+  done
+  return 1
 }
-if [ -f "$dir/shape/shape.h5" ] && stale "$dir/shape/shape_force.png" "$dir/shape/shape.h5"; then
+if [ -f "$dir/shape/shape.h5" ] && stale "$dir/shape/shape.h5" "$dir/shape/shape_force.png"; then
   $py tools/plot_wrench.py "$dir/shape/shape.h5" --force-only -o "$dir/shape/shape_force.png"
 fi
-if [ -f "$dir/lookup/table.h5" ] && stale "$dir/lookup/lookup_trends.csv" "$dir/lookup/table.h5"
-then
-  $py tools/plot_lookup.py "$dir/lookup/table.h5" -o "$dir/lookup"
+lookup=$dir/lookup
+if [ -f "$lookup/table.h5" ] && stale "$lookup/table.h5" "$lookup/lookup_trends.csv" \
+  "$lookup/lookup_fig9.png" "$lookup/lookup_fig10.png" "$lookup/lookup_fig11.png"; then
+  $py tools/plot_lookup.py "$lookup/table.h5" -o "$lookup"
 fi
 $py tools/report.py "$dir" -o "$out"

@@ -13,7 +13,9 @@ report.sh draws the lookup figures and trends). Checks:
   - headless Chromium loads the page and every <img> has naturalWidth > 0 (an inline script added
     to a copy of the page marks each image); skipped (exit 77) when chromium is not installed
     (tools/install-deps.sh --test installs it);
-  - a folder with nothing: every section "Not run: <its command>", exit 0;
+  - report.sh run again redraws nothing and writes the same page;
+  - a folder with nothing: every section "Not run: <its command>", exit 0; with the lookup
+    sweep's table alone, only tools/plot_lookup.py is "not run";
   - an input that exists but is unreadable (shape.h5 not HDF5, a PNG that is not one, a CSV
     without its columns): one line on stderr naming it, exit 2."""
 
@@ -185,6 +187,14 @@ def main():
         assert cells[0] == "mean, rows cut" and cells[3] == "0.49", cells
         assert "mean_F_ratio_geomean" in page
 
+        # Again: nothing is redrawn (the figures are newer than their inputs), the same page.
+        mtime = os.path.getmtime(os.path.join(root, "lookup", "lookup_fig9.png"))
+        r = subprocess.run(["bash", WRAPPER, root, page_path], capture_output=True, text=True)
+        assert r.returncode == 0 and "plot_lookup" not in r.stdout + r.stderr, r.stdout + r.stderr
+        assert os.path.getmtime(os.path.join(root, "lookup", "lookup_fig9.png")) == mtime
+        with open(page_path, encoding="utf-8") as f:
+            check_embedded(f.read(), root)
+
         widths = check_chromium(page_path, tmp)
         if widths is not None:
             assert sorted(widths) == sorted(FIGURES), widths
@@ -200,6 +210,15 @@ def main():
         assert blank.count('class="notrun">Not run: ') == 5, blank
         assert "Not run: build/scoopsim study shape scenes/paper/shape_study.yaml -o " + empty + \
             "/shape/shape.h5" in blank
+        # The lookup sweep done but not drawn: only the drawing is not run.
+        os.makedirs(os.path.join(empty, "lookup"))
+        shutil.copy(os.path.join(root, "lookup", "table.h5"), os.path.join(empty, "lookup"))
+        r = subprocess.run([sys.executable, REPORT, empty], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        with open(os.path.join(empty, "report.html"), encoding="utf-8") as f:
+            blank = f.read()
+        assert ('class="notrun">Not run: tools/plot_lookup.py %s/lookup/table.h5 -o %s/lookup<'
+                % (empty, empty)) in blank, blank
 
         # Unreadable inputs.
         run = lambda args: subprocess.run([sys.executable, REPORT] + args, capture_output=True,
