@@ -118,9 +118,14 @@ class Report:
         return os.path.join(self.root, *parts)
 
     def command_lines(self, key):
-        """DIR/commands.txt's lines for `key`, else what its files record, else the default."""
-        return (self.commands.get(key) or self.recorded.get(key) or
-                [c.replace("DIR", self.root) for c in COMMANDS[key]])
+        """(lines, where from): DIR/commands.txt's lines for `key`, else what its files record,
+        else the layout's default."""
+        if key in self.commands:
+            return self.commands[key], "commands.txt"
+        if key in self.recorded:
+            return self.recorded[key], "as its files record"
+        return ([c.replace("DIR", self.root) for c in COMMANDS[key]],
+                "the layout's command: the files do not say which scene, commands.txt can")
 
     def figure(self, key, rel, caption):
         """An embedded PNG, or a visible note when the file is missing."""
@@ -145,11 +150,12 @@ class Report:
         if body is None:
             status = "not run"
             body = '<div class="notrun">Not run: %s</div>' % esc(" && ".join(
-                self.command_lines(key)))
+                self.command_lines(key)[0]))
         else:
             status = "shown"
-            body = "<p>Made by:</p><pre>%s</pre>%s" % (esc("\n".join(self.command_lines(key))),
-                                                       body)
+            lines, source = self.command_lines(key)
+            body = "<p>Made by (%s):</p><pre>%s</pre>%s" % (esc(source), esc("\n".join(lines)),
+                                                            body)
         self.sections.append((key, title, status, body))
 
     def html(self):
@@ -230,24 +236,29 @@ def shape_section(rep):
             templates = str(f.attrs.get("templates", "")).split(",")
     except OSError as e:
         raise InputError("%s: cannot open as HDF5 (%s)" % (path, e))
-    order = ["spheres_per_clump", "clumps", "spheres", "time_step", "bed_wall_s", "dig_wall_s",
-             "dig_cpu_s", "peak_force", "mean_force", "peak_overlap"]
-    names = [c for c in order if c in columns] + sorted(c for c in columns if c not in order)
+    # /table's columns as `study shape` prints them: header, format.
+    shown = {"spheres_per_clump": ("spheres/clump", "%d"), "clumps": ("clumps", "%d"),
+             "spheres": ("spheres", "%d"), "time_step": ("dt [s]", "%.3g"),
+             "bed_wall_s": ("bed wall [s]", "%.1f"), "dig_wall_s": ("dig wall [s]", "%.1f"),
+             "dig_cpu_s": ("dig CPU [s]", "%.1f"), "peak_force": ("peak |F| [N]", "%.4g"),
+             "mean_force": ("mean |F| [N]", "%.4g"),
+             "peak_overlap": ("peak overlap [% of diameter]", "%.3g")}
+    names = [c for c in shown if c in columns] + sorted(c for c in columns if c not in shown)
     n = max((len(v) for v in columns.values()), default=0)
     if any(len(columns[c]) != n for c in names):
         raise InputError("%s: the /table datasets differ in length" % path)
-    units = {"time_step": " [s]", "bed_wall_s": " [s]", "dig_wall_s": " [s]", "dig_cpu_s": " [s]",
-             "peak_force": " [N]", "mean_force": " [N]"}
+    cell = lambda c, v: (shown[c][1] % (100 * v if c == "peak_overlap" else v)
+                         if c in shown and np.isfinite(v) else num(v))
     rows = []
     for k in range(n):
         t = templates[k] if k < len(templates) and templates[k] else "row %d" % k
         study = STUDY_SHAPE_HOURS.get(t)
-        rows.append([t] + [num(columns[c][k]) for c in names] +
-                     ["%g" % study if study is not None else "-"])
+        rows.append([t] + [cell(c, columns[c][k]) for c in names] +
+                    ["%g" % study if study is not None else "-"])
     body = ("<p>The Table 1 dig once per clump template, each on its own bed of the same solid "
             "volume (paper section 4, Table 3, Fig. 8). peak/mean force: |F| in the world frame, "
-            "the mean after first contact; peak_overlap: deepest overlap / smaller diameter.</p>")
-    body += table(["template"] + [c + units.get(c, "") for c in names] +
+            "the mean after first contact; peak overlap: the deepest overlap over the dig's steps.</p>")
+    body += table(["template"] + [shown[c][0] if c in shown else c for c in names] +
                   ["the study's time [h] (Table 3)"], rows)
     body += rep.figure("shape", os.path.join("shape", "shape_force.png"),
                        "|F| against rho per template (Fig. 8 analogue)")

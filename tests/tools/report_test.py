@@ -16,8 +16,11 @@ report.sh draws the lookup figures and trends). Checks:
   - report.sh run again redraws nothing and writes the same page;
   - a folder with nothing: every section "Not run: <its command>", exit 0; with the lookup
     sweep's table alone, only tools/plot_lookup.py is "not run";
+  - the command shown: DIR/commands.txt's (shape), the one the files record (size), else the
+    layout's (lookup), each said;
   - an input that exists but is unreadable (shape.h5 not HDF5, a PNG that is not one, a CSV
-    without its columns): one line on stderr naming it, exit 2."""
+    without its columns, a commands.txt line without a known key): one line on stderr naming
+    it, exit 2."""
 
 import base64
 import os
@@ -69,7 +72,7 @@ def write_shape(path):
             g["scoop/torque_body"] = np.tile([0.1, 0.0, 0.0], (n, 1))
         f["table/spheres_per_clump"] = np.array([1, 4], dtype=np.int32)
         f["table/clumps"] = np.array([1000, 1000], dtype=np.int64)
-        f["table/dig_cpu_s"] = np.array([12.5, 40.25])
+        f["table/dig_cpu_s"] = np.array([12.5, 40.5])
         f["table/peak_force"] = np.array([1.118, 2.062])
 
 
@@ -120,6 +123,9 @@ def make_results(root):
     write_balovnev(os.path.join(root, "balovnev"))
     write_testbed(os.path.join(root, "testbed"))
     plot_lookup_test.write_table(os.path.join(root, "lookup", "table.h5"))
+    with open(os.path.join(root, "commands.txt"), "w") as f:
+        f.write("# what was run\nshape: build/scoopsim study shape scenes/shape_study_small.yaml "
+                "-o results/shape/shape.h5\n")
 
 
 def check_embedded(page, root):
@@ -174,12 +180,19 @@ def main():
         with open(page_path, encoding="utf-8") as f:
             page = f.read()
         check_embedded(page, root)
-        assert "<td>tetra4</td>" in page.replace(' class="l"', "") and "40.25" in page
+        shape_row = "<tr><td>tetra4</td><td>4</td><td>1000</td><td>40.5</td><td>2.062</td><td>2.3</td>"
+        assert shape_row in page.replace(' class="l"', ""), "the shape table"
+        shape = page[page.index('id="shape"'):page.index('id="size"')]
+        assert ("Made by (commands.txt):</p><pre>build/scoopsim study shape "
+                "scenes/shape_study_small.yaml -o results/shape/shape.h5</pre>") in shape, shape
+        lookup = page[page.index('id="lookup"'):]
+        assert "Made by (the layout&#x27;s command: " in lookup, lookup[:400]
         size = page[page.index('id="size"'):page.index('id="balovnev"')]
         assert "largest_within_20pct_mm=4 &mdash; 4 mm, coarser than the study" in size, size
         assert "all_beds_mm=2 &mdash; 2 mm, finer than the study" in size, size
         assert "<pre>build/scoopsim study particle-size scenes/paper/size_S2.yaml -o " + \
             os.path.join(root, "size") + "</pre>" in size, "the recorded command"
+        assert "Made by (as its files record)" in size
         bal = page[page.index('id="balovnev"'):page.index('id="testbed"')]
         rows = re.findall(r"<tr>(.*?)</tr>", bal)
         assert len(rows) == 1 + 10 + 1, len(rows)
@@ -236,7 +249,12 @@ def main():
         os.makedirs(os.path.join(bad_csv, "size"))
         with open(os.path.join(bad_csv, "size", "size_study.csv"), "w") as f:
             f.write("size_mm,beds\n2,1\n")
-        expect_refused(run, (([bad_h5], "shape.h5"), ([bad_png], "testbed_sand.png"),
+        bad_commands = os.path.join(tmp, "bad_commands")
+        os.makedirs(bad_commands)
+        with open(os.path.join(bad_commands, "commands.txt"), "w") as f:
+            f.write("shape: ok\nshpae: a typo\n")
+        expect_refused(run, (([bad_commands], "commands.txt:2: expected `KEY: COMMAND`"),
+                             ([bad_h5], "shape.h5"), ([bad_png], "testbed_sand.png"),
                              ([bad_csv], "missing column peak_force_mean"),
                              ([os.path.join(tmp, "none")], "none: no such folder")))
     if widths is None:
@@ -244,7 +262,7 @@ def main():
               "installs it); every other check passed")
         return 77
     print("report_test: 9 figures embedded and rendered by headless Chromium, empty folder -> 5 "
-          "'not run' sections, 4 bad inputs refused")
+          "'not run' sections, 5 bad inputs refused")
     return 0
 
 
