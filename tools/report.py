@@ -257,7 +257,8 @@ def shape_section(rep):
                     ["%g" % study if study is not None else "-"])
     body = ("<p>The Table 1 dig once per clump template, each on its own bed of the same solid "
             "volume (paper section 4, Table 3, Fig. 8). peak/mean force: |F| in the world frame, "
-            "the mean after first contact; peak overlap: the deepest overlap over the dig's steps.</p>")
+            "the mean after first contact; peak overlap: the deepest overlap over the dig's "
+            "steps.</p>")
     body += table(["template"] + [shown[c][0] if c in shown else c for c in names] +
                   ["the study's time [h] (Table 3)"], rows)
     body += rep.figure("shape", os.path.join("shape", "shape_force.png"),

@@ -180,7 +180,8 @@ def main():
         with open(page_path, encoding="utf-8") as f:
             page = f.read()
         check_embedded(page, root)
-        shape_row = "<tr><td>tetra4</td><td>4</td><td>1000</td><td>40.5</td><td>2.062</td><td>2.3</td>"
+        shape_row = ("<tr><td>tetra4</td><td>4</td><td>1000</td><td>40.5</td><td>2.062</td>"
+                     "<td>2.3</td>")
         assert shape_row in page.replace(' class="l"', ""), "the shape table"
         shape = page[page.index('id="shape"'):page.index('id="size"')]
         assert ("Made by (commands.txt):</p><pre>build/scoopsim study shape "
