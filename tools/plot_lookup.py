@@ -18,7 +18,8 @@ pass or material -> left out (a figure with nothing to draw says so in its one p
 The trajectory's segments (rotation, push, ...) are marked on the rho axis as the study marks
 them, found by plot_wrench.segments from /scoop/pose of the first line's case file: the table's
 /cases/file, relative to the sweep folder (--cases; default the table's own folder, where
-`scoopsim sweep` puts it). Without the case file the figures have no marks (said on stderr).
+`scoopsim sweep` puts it; through a link, the folder of the file linked to). Without the case
+file the figures have no marks (said on stderr).
 
 The numbers (lookup_trends.csv: trend,material,bite_depth_mm,pass,statistic,value,detail), all
 from the table's raw samples (not smoothed; |F| is the same in either frame):
@@ -379,7 +380,9 @@ def main(argv=None):
             raise InputError("--smooth: expected a window >= 1 node, got %d" % args.smooth)
         window = args.smooth if args.smooth % 2 == 1 else args.smooth + 1
         t = read_table(args.table, args.frame)
-        cases_dir = args.cases or os.path.dirname(os.path.abspath(args.table))
+        # The table's own folder, through a link: the report's DIR/lookup/table.h5 may link
+        # to the sweep's.
+        cases_dir = args.cases or os.path.dirname(os.path.realpath(args.table))
         os.makedirs(args.output, exist_ok=True)
         rows = trends(cell_stats(t))
         drawn = {}

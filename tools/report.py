@@ -410,6 +410,27 @@ def testbed_section(rep):
     return body
 
 
+def lookup_table_summary(path):
+    """What the wrench table holds (materials and their particles, bite depths, passes), or ""
+    without it."""
+    if not os.path.isfile(path):
+        return ""
+    import h5py
+    text = lambda v: v.decode() if isinstance(v, bytes) else str(v)
+    try:
+        with h5py.File(path, "r") as f:
+            materials = [text(v) for v in f["materials/name"][()]]
+            sizes = [text(v) for v in f["materials/particle_size"][()]] \
+                if "materials/particle_size" in f else [""] * len(materials)
+            depths = 1e3 * np.asarray(f["bite_depth"][()], dtype=float)
+            passes = [int(v) for v in f["pass"][()]]
+    except (OSError, KeyError) as e:
+        raise InputError("%s: not a readable wrench table (%s)" % (path, e))
+    return "<p>The table (lookup/table.h5): %s; bite depths %s mm; passes %s.</p>" % (
+        esc("; ".join("%s (%s)" % (m, z) if z else m for m, z in zip(materials, sizes))),
+        esc(", ".join("%g" % d for d in depths)), esc(", ".join(map(str, passes))))
+
+
 def lookup_section(rep):
     trends = rep.path("lookup", "lookup_trends.csv")
     figs = [os.path.join("lookup", "lookup_fig%d.png" % k) for k in (9, 10, 11)]
@@ -421,6 +442,7 @@ def lookup_section(rep):
             "against rho (the scoop CoM's travel along the trench since first contact), the "
             "trajectory's segments dotted. mean |F|: the mean of |F| over the rho grid nodes "
             "where the table has data; peak |F|: the largest there (raw table samples).</p>")
+    body += lookup_table_summary(rep.path("lookup", "table.h5"))
     if os.path.isfile(trends):
         _, rows = read_csv(trends, "plot_lookup.py's lookup_trends.csv")
         need_columns(trends, rows, ("trend", "material", "bite_depth_mm", "pass", "statistic",

@@ -10,8 +10,8 @@ grows with bite depth and with pass everywhere but where the table is made not t
 9 mm pass 3 has a = 0.5 (below 5 mm's 15: snow pass 3 does not grow with depth, snow 9 mm does not
 grow with pass); ice 3 mm pass 3 has no data (left out of the trends, its pair with snow too).
 Tolerance: relative 1e-8 (the CSV keeps 9 significant digits). The segment marks come from the
-one case file written (ice 15 mm: a rotation, a push, a rotation); the figures without theirs say
-so on stderr. A missing file or dataset: one line, exit 2."""
+one case file written (ice 15 mm: a rotation, a push, a rotation), found also through a link to the
+table; the figures without theirs say so on stderr. A missing file or dataset: one line, exit 2."""
 
 import csv
 import os
@@ -150,6 +150,15 @@ def main():
             assert grows[("vs_pass", "snow", "15", "1;2;3", stat)] == "1"
             assert grows[("vs_pass", "ice", "3", "1;2", stat)] == "1"
         assert "| 9 | 3 | mean_F_ratio | 540 |" in result.stdout, result.stdout  # printed
+
+        # A link to the table elsewhere (the report's DIR/lookup/table.h5): the case files are
+        # still found beside the file it links to.
+        os.makedirs(os.path.join(tmp, "report"))
+        os.symlink(table, os.path.join(tmp, "report", "table.h5"))
+        linked = subprocess.run([sys.executable, SCRIPT, os.path.join(tmp, "report", "table.h5"),
+                                 "-o", os.path.join(tmp, "report")], capture_output=True, text=True)
+        assert linked.returncode == 0, linked.stderr
+        assert "lookup_fig9.png: no segment marks" not in linked.stderr, linked.stderr
 
         broken = os.path.join(tmp, "broken.h5")
         write_table(broken, drop="force")

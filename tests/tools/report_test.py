@@ -200,6 +200,8 @@ def main():
         cells = re.findall(r"<td[^>]*>([^<]*)</td>", rows[-1])
         assert cells[0] == "mean, rows cut" and cells[3] == "0.49", cells
         assert "mean_F_ratio_geomean" in page
+        assert "The table (lookup/table.h5): snow; ice; bite depths 3, 5, 9, 15 mm; passes 1, 2, " \
+            "3." in page
 
         # Again: nothing is redrawn (the figures are newer than their inputs), the same page.
         mtime = os.path.getmtime(os.path.join(root, "lookup", "lookup_fig9.png"))
