@@ -18,7 +18,7 @@ DIR's layout (tools/report.sh makes the figures that come from other files, then
                              dig.balovnev.csv (the table: ten spans of the rows that cut, as the
                              study prints it) and dig.balovnev.png
   DIR/testbed/               tools/testbed_sand.sh DIR/testbed: testbed_sand.png (Fig. 13),
-                             summary.csv, times.txt
+                             summary.csv, times.txt, seed1.balovnev.png (shown when there)
   DIR/lookup/                the lookup set's sweep folder (scoopsim sweep ... -o DIR/lookup:
                              table.h5, cases/), and tools/plot_lookup.py's lookup_fig9.png,
                              lookup_fig10.png, lookup_fig11.png, lookup_trends.csv
@@ -407,6 +407,9 @@ def testbed_section(rep):
             raise InputError("%s: cannot read (%s)" % (times, e.strerror))
     body += rep.figure("testbed", os.path.join("testbed", "testbed_sand.png"),
                        "body-frame force against distance pushed, over beds (Fig. 13 analogue)")
+    if os.path.isfile(rep.path("testbed", "seed1.balovnev.png")):  # testbed_sand.sh's first bed
+        body += rep.figure("testbed", os.path.join("testbed", "seed1.balovnev.png"),
+                           "the first bed's push against Balovnev's model (study balovnev)")
     return body
 
 
