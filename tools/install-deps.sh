@@ -1,5 +1,8 @@
 #!/usr/bin/env bash
 # Installs every Debian package scoopsim needs. Idempotent; runs as root or through sudo.
+#   tools/install-deps.sh          what building, running and plotting need
+#   tools/install-deps.sh --test   also what only the tests need (chromium: tools/report.py's page
+#                                  is checked in a headless browser); tools/test.sh passes it
 set -euo pipefail
 PKGS=(
   build-essential cmake pkg-config git
@@ -10,6 +13,11 @@ PKGS=(
   libosmesa6-dev libgl-dev libpng-dev
   libbullet-dev liburdfdom-dev libeigen3-dev
 )
+case "${1:-}" in
+  --test) PKGS+=(chromium) ;;
+  "") ;;
+  *) echo "install-deps: unknown argument $1 (expected --test or nothing)" >&2; exit 2 ;;
+esac
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-bash tools/install-deps.sh
+bash tools/install-deps.sh --test  # --test: chromium for the report's render check
 
 preset=release
 if [ "${CI:-}" = "true" ]; then preset=ci; fi
