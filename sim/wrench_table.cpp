@@ -473,7 +473,16 @@ std::array<double, 6> WrenchTable::Query(const std::string& material, double bit
   return v;
 }
 
-void WrenchTable::ExportCsv(const std::string& csv_path) const {
+void WrenchTable::ExportCsv(const std::string& csv_path, int digits) const {
+  if (digits < 0 || digits > 17)
+    throw InputError("--digits: expected 1 to 17 significant digits, got " +
+                     std::to_string(digits));
+  auto text = [digits](double v) {
+    if (digits == 0) return Shortest(v);
+    char s[64];
+    std::snprintf(s, sizeof s, "%.*g", digits, v);
+    return std::string(s);
+  };
   if (fs::path(csv_path).has_parent_path())
     fs::create_directories(fs::path(csv_path).parent_path());
   const std::string tmp = csv_path + ".tmp";
@@ -489,7 +498,7 @@ void WrenchTable::ExportCsv(const std::string& csv_path) const {
             if (std::isnan(w[0])) continue;
             out << material_ids_[m] << ',' << Shortest(bite_depths_[b]) << ',' << passes_[p] << ','
                 << Shortest(rho_[r]);
-            for (double v : w) out << ',' << Shortest(v);
+            for (double v : w) out << ',' << text(v);
             out << '\n';
           }
         }

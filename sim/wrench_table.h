@@ -85,8 +85,9 @@ class WrenchTable {
   // The lander simulator's CSV: header m,d,p,rho,Fx,Fy,Fz,Tx,Ty,Tz; m the material id, d the
   // bite depth [m], p the pass, rho [m], the wrench in the l_scoop frame about the CoM [N, N m];
   // one row per grid node with data, by material id, bite depth, pass and rho. Numbers in
-  // their shortest form that reads back to the same double.
-  void ExportCsv(const std::string& csv_path) const;
+  // their shortest form that reads back to the same double; with `digits` (1-17) the wrench
+  // with that many significant digits (a smaller file; the keys stay exact).
+  void ExportCsv(const std::string& csv_path, int digits = 0) const;
 
   const std::string& path() const { return path_; }
   const std::vector<std::string>& materials() const { return materials_; }

@@ -57,6 +57,11 @@ void SweepCommands::AddTo(CLI::App* app) {
                                   "Write the lander simulator's CSV: m,d,p,rho,Fx,Fy,Fz,Tx,Ty,Tz");
   export_->add_option("TABLE", export_table_, "Table file (HDF5)")->required();
   export_->add_option("-o,--output", export_output_, "CSV file")->capture_default_str();
+  export_
+      ->add_option("--digits", export_digits_,
+                   "Significant digits of the wrench (default: as many as read back to the "
+                   "table's double exactly)")
+      ->check(CLI::Range(1, 17));
 }
 
 int SweepCommands::Run() {
@@ -93,7 +98,7 @@ int SweepCommands::Run() {
   }
   if (*export_) {
     const sim::WrenchTable table(export_table_);
-    table.ExportCsv(export_output_);
+    table.ExportCsv(export_output_, export_digits_);
     std::fprintf(stderr, "scoopsim: wrote %s\n", export_output_.c_str());
     return 0;
   }

@@ -42,6 +42,7 @@ class SweepCommands {
 
   CLI::App* export_ = nullptr;
   std::string export_table_, export_output_ = "out/table.csv";
+  int export_digits_ = 0;  // 0: shortest round-trip text
 };
 
 }  // namespace tools

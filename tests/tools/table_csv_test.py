@@ -91,6 +91,25 @@ def main():
         # Cells without a case (snow 9 mm, ice 3 mm) have no rows.
         assert not any(int(r[0]) == 1 and float(r[1]) == 0.009 for r in rows)
 
+        # --digits 6: the same rows and keys, each wrench value within half a unit of its sixth
+        # significant digit (relative 5e-6), and --digits outside 1-17 refused with exit 2.
+        short_csv = os.path.join(tmp, "table6.csv")
+        subprocess.run([scoopsim, "table", "export-csv", table, "-o", short_csv, "--digits", "6"],
+                       check=True)
+        with open(short_csv, newline="") as f:
+            short = list(csv.reader(f))[1:]
+        assert len(short) == len(rows)
+        for row, full in zip(short, rows):
+            assert row[:4] == full[:4], (row, full)
+            got = np.array([float(x) for x in row[4:]])
+            want = np.array([float(x) for x in full[4:]])
+            assert np.all(np.abs(got - want) <= 5e-6 * np.abs(want)), (row, full)
+            assert all(len(x.lstrip("-").replace(".", "").split("e")[0].lstrip("0")) <= 6
+                       for x in row[4:]), row
+        bad = subprocess.run([scoopsim, "table", "export-csv", table, "-o", short_csv,
+                              "--digits", "18"], capture_output=True, text=True)
+        assert bad.returncode == 2 and "--digits" in bad.stderr, (bad.returncode, bad.stderr)
+
         # `table query` at a grid node: the CSV's row.
         mid, d, pn, rho, w = expected[len(expected) // 2]
         material = "snow" if mid == 1 else "ice"
