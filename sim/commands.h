@@ -42,6 +42,10 @@ void CheckWritable(const std::string& path);
 void RefuseOutputOverInput(const std::string& output, const std::string& input,
                            const std::string& what);
 
+// Runs /usr/bin/python3 <source>/tools/<script> with `args` (each quoted for the shell), as the
+// studies draw their figures; false (and a line on stderr naming the command) when it fails.
+bool RunPlotScript(const std::string& script, const std::vector<std::string>& args);
+
 // `scoopsim bed SCENE -o BED.h5`: fill the scene's box, settle, save the bed.
 int MakeBed(const Scene& scene, const RunOptions& options);
 
