@@ -288,4 +288,23 @@ TEST(SizeStudyCasesTest, BadScenesAndSizesAreRefused) {
   EXPECT_NE(key_of([&] { sim::SizeCases(saved_bed, {10, 4}, 1); }), "(no error)");
 }
 
+// A bad --sizes on the command line: one line naming the option and what was expected, exit 2,
+// before any work (no output folder).
+TEST(SizeStudyCasesTest, BadSizesOnTheCommandLineExitTwo) {
+  const std::string scene = kSourceDir + "/scenes/paper/size_S10.yaml";
+  for (const std::string sizes : {"10,-2", "10", "10,abc", "10,8,10"}) {
+    SCOPED_TRACE(sizes);
+    const fs::path out = TempDir() / "cli_bad";
+    const std::string log = (TempDir() / "cli_bad.log").string();
+    EXPECT_EQ(
+        scoopsim_test::RunScoopsim(
+            "study particle-size " + scene + " -o " + out.string() + " --sizes " + sizes, log),
+        2);
+    const std::string text = scoopsim_test::ReadText(log);
+    EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+    EXPECT_NE(text.find("--sizes"), std::string::npos) << text;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
 }  // namespace
