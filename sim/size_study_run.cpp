@@ -79,7 +79,10 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
   const std::vector<SizeCase> cases = SizeCases(scene, sizes, options.beds);
 
   // The cases as a sweep file in DIR, run by the sweep machinery.
-  const fs::path sweep_file = fs::path(options.dir) / "size_study.sweep.yaml";
+  // Its path absolute and normal: a case's scene text names the sweep file, and a finished case
+  // is skipped only for the same text, so `-o out/x` and `-o ./out/x/` must name it alike.
+  const fs::path sweep_file =
+      fs::absolute(fs::path(options.dir) / "size_study.sweep.yaml").lexically_normal();
   WriteIfChanged(sweep_file,
                  SizeSweepText(fs::absolute(scene_path).lexically_normal().string(), cases));
   const Sweep sweep = LoadSweep(sweep_file.string());
