@@ -21,6 +21,7 @@ python3-matplotlib.
 import os
 import re
 import sys
+import textwrap
 
 import numpy as np
 
@@ -111,7 +112,7 @@ def main():
     axes[1].set_xlabel("rho: the scoop CoM's travel along the trench since first contact [mm]")
     fig.suptitle("Particle size: force and torque (smoothed bed mean; band: min-max over beds; "
                  "faint: raw, first bed)\n"
-                 "smoothing: %s" % smoothing, fontsize=9)
+                 + textwrap.fill("smoothing: %s" % smoothing, 120), fontsize=9)
     fig.tight_layout()
     written.append(os.path.join(d, "size_force.png"))
     fig.savefig(written[-1], dpi=110)
@@ -126,6 +127,7 @@ def main():
             ax.plot(1e3 * m["rho"], np.full(m["rho"].shape, s), m[c][0], color=colour, lw=1.3)
         ax.set_xlabel("rho [mm]")
         ax.set_ylabel("diameter [mm]")
+        ax.set_yticks(sizes)
         ax.set_zlabel(what)
         ax.view_init(elev=25, azim=-60)
     fig.suptitle("Particle size: smoothed force and torque against rho and diameter (bed means)",
