@@ -58,12 +58,6 @@ struct Row {
   BalovnevForce split, plugin;
 };
 
-std::string Quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
 }  // namespace
 
 std::string BalovnevCsvPath(const std::string& output) {
@@ -259,14 +253,7 @@ int RunBalovnevStudy(const Scene& scene_in, const BalovnevStudyOptions& options)
   // The figure, by the project's plotting script.
   if (!options.plot) return kExitOk;
   const std::string png = BalovnevPngPath(options.output);
-  const std::string command = "/usr/bin/python3 " +
-                              Quote(std::string(SCOOPSIM_SOURCE_DIR) + "/tools/plot_balovnev.py") +
-                              " " + Quote(csv_path) + " -o " + Quote(png);
-  if (std::system(command.c_str()) != 0) {
-    std::fprintf(stderr, "scoopsim: study balovnev: the plot failed: %s\n", command.c_str());
-    return kExitFailure;
-  }
-  return kExitOk;
+  return RunPlotScript("plot_balovnev.py", {csv_path, "-o", png}) ? kExitOk : kExitFailure;
 }
 
 }  // namespace sim

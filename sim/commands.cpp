@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -69,6 +70,20 @@ void CheckWritable(const std::string& path) {
   std::fclose(f);
   std::error_code ignored;
   std::filesystem::remove(probe, ignored);
+}
+
+bool RunPlotScript(const std::string& script, const std::vector<std::string>& args) {
+  const auto quote = [](const std::string& text) {
+    std::string q = "'";
+    for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+  };
+  std::string command =
+      "/usr/bin/python3 " + quote(std::string(SCOOPSIM_SOURCE_DIR) + "/tools/" + script);
+  for (const std::string& arg : args) command += " " + quote(arg);
+  if (std::system(command.c_str()) == 0) return true;
+  std::fprintf(stderr, "scoopsim: the plot failed: %s\n", command.c_str());
+  return false;
 }
 
 void RefuseOutputOverInput(const std::string& output, const std::string& input,

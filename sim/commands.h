@@ -42,6 +42,10 @@ void CheckWritable(const std::string& path);
 void RefuseOutputOverInput(const std::string& output, const std::string& input,
                            const std::string& what);
 
+// Runs /usr/bin/python3 <source>/tools/<script> with `args` (each quoted for the shell), as the
+// studies draw their figures; false (and a line on stderr naming the command) when it fails.
+bool RunPlotScript(const std::string& script, const std::vector<std::string>& args);
+
 // `scoopsim bed SCENE -o BED.h5`: fill the scene's box, settle, save the bed.
 int MakeBed(const Scene& scene, const RunOptions& options);
 
@@ -104,6 +108,39 @@ struct BalovnevStudyOptions {
 int RunBalovnevStudy(const Scene& scene, const BalovnevStudyOptions& options);
 std::string BalovnevCsvPath(const std::string& output);  // OUT.h5 -> OUT.balovnev.csv
 std::string BalovnevPngPath(const std::string& output);  // OUT.h5 -> OUT.balovnev.png
+
+// `scoopsim study particle-size SCENE -o DIR`: the particle-size study (paper section 4, eq. 5-7,
+// Fig. 3-6; definitions in sim/size_study.h). The scene (spheres of one diameter d0, poured, one
+// pass of a dig) is run once per diameter d and bed: bed.radius d/2, bed.count x (d0/d)^3 (the
+// same solid volume), neighbor.skin x d/d0, bed.seed + bed - 1. The cases are a sweep
+// (sim/sweep.h), written to DIR/size_study.sweep.yaml and run as `scoopsim sweep` runs one: into
+// DIR/cases/<name>.h5 (names d<mm>_b<bed>), finished cases skipped, a stopped case resumed, under
+// `mpirun -np N` handed out to the ranks, one case alone with only_case. Once every case is done
+// (where the sweep would build its table: the plain runner or rank 0), each case's |F| and |T|
+// after first contact are smoothed and their peaks compared with the finest size's (eq. 6-7):
+//   DIR/size_study.csv   '#' lines (scene, smoothing rule, reference size, eq. 6 and 7 rules,
+//                        `# verdict: largest_within_20pct_mm=<d>` and the same with the spread),
+//                        then one row per size: size_mm, beds, peak_force_mean/min/max,
+//                        mpe_force_pct/min_pct/max_pct, peak_torque_mean/min/max,
+//                        mpe_torque_pct/min_pct/max_pct, within_20 (1/0), cpu_s_mean (pour + dig,
+//                        all threads, mean over beds)
+//   DIR/size_curves.csv  every case's curve: size_mm, bed, time (since first contact), rho, force,
+//                        torque, force_smooth, torque_smooth
+//   stdout               the table
+//   DIR/size_force.png, DIR/size_stack.png, DIR/size_mpe.png   by tools/plot_size_study.py
+//                        (Fig. 3, 4 and 6 analogues; /usr/bin/python3; exit 1 if it fails)
+struct SizeStudyOptions {
+  std::string dir = "out/size_study";
+  std::vector<double> sizes_mm;  // empty: the study's S (eq. 5)
+  int beds = 3;                  // independent beds per size
+  int threads = -1;              // per case; -1: the scene's `threads` (plain) or 1 (MPI rank)
+  bool quiet = false;            // no progress line within a case
+  bool list = false;             // print the cases (index, name, settings, cost) and stop
+  int only_case = -1;            // >= 0: run this case alone (no analysis)
+  double smooth_s = 0.05;        // the moving mean's window [s]
+  bool plot = true;
+};
+int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options);
 
 struct BenchSettleOptions {
   int64_t particles = 50000;

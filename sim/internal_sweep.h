@@ -49,7 +49,8 @@ class Log {
 bool LaunchedByMpi();
 // The MPI sweep: returns this rank's exit status.
 int RunMpi(const Sweep& sweep, const SweepOptions& options);
-// Builds DIR/table.h5 when every case is done; returns an exit status.
+// When every case is done: builds DIR/table.h5 (SweepOptions::build_table), then calls
+// SweepOptions::on_complete; returns an exit status.
 int FinishTable(const Sweep& sweep, const SweepOptions& options);
 
 }  // namespace sim::sweep

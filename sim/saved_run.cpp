@@ -90,6 +90,7 @@ ScoopSeries SavedRun::Scoop() const {
     s.pass.push_back(static_cast<int>(std::lround(pass)));
   s.rho = column("/scoop/rho", 1);
   if (in.Exists("/scoop/force_world")) s.force_world = in.ReadVectors("/scoop/force_world", n);
+  if (in.Exists("/scoop/torque_world")) s.torque_world = in.ReadVectors("/scoop/torque_world", n);
   const std::vector<double> pose = column("/scoop/pose", 7);
   for (size_t k = 0; k + 7 <= pose.size(); k += 7) {
     const double* q = &pose[k];

@@ -24,11 +24,12 @@ struct SnapshotInfo {
 // The scoop's series of a dig (/scoop/...), one row per sample, all of equal length. Fields the
 // file lacks are empty.
 struct ScoopSeries {
-  std::vector<double> time;            // [s] (n), ascending
-  std::vector<int> pass;               // dig pass, 1-based (n)
-  std::vector<double> rho;             // distance along the trench since first contact [m] (n)
-  std::vector<dem::Vec3> force_world;  // force on the scoop, world frame [N] (n)
-  std::vector<dem::Pose> pose;         // l_scoop -> world (n; stored as x y z qw qx qy qz)
+  std::vector<double> time;             // [s] (n), ascending
+  std::vector<int> pass;                // dig pass, 1-based (n)
+  std::vector<double> rho;              // distance along the trench since first contact [m] (n)
+  std::vector<dem::Vec3> force_world;   // force on the scoop, world frame [N] (n)
+  std::vector<dem::Vec3> torque_world;  // torque about the scoop CoM, world frame [N m] (n)
+  std::vector<dem::Pose> pose;          // l_scoop -> world (n; stored as x y z qw qx qy qz)
 
   bool empty() const { return time.empty(); }
   // The last sample at or before `t` (1e-9 s slack for rounding); -1 when there is none.
@@ -85,8 +86,8 @@ class SavedRun {
   // for a missing dataset or one of the wrong shape.
   void ReadSnapshot(const SnapshotInfo& snapshot, dem::Particles* particles) const;
 
-  // The /scoop/ series (time, pass, rho, force_world, pose); empty when the run had no dig.
-  // Throws InputError for a series whose length differs from /scoop/time's.
+  // The /scoop/ series (time, pass, rho, force_world, torque_world, pose); empty when the run had
+  // no dig. Throws InputError for a series whose length differs from /scoop/time's.
   ScoopSeries Scoop() const;
   // The /arm/ series; empty when the run had no arm. InputError for a series of the wrong shape.
   ArmSeries Arm() const;

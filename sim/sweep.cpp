@@ -439,6 +439,19 @@ Sweep LoadSweep(const std::string& path) {
   return sweep;
 }
 
+std::string SweepCaseList(const Sweep& sweep) {
+  std::string text;
+  for (const SweepCase& c : sweep.cases) {
+    std::string settings;
+    for (const SweepSetting& s : c.settings)
+      settings += (settings.empty() ? "" : ", ") + s.key + " = " + s.value;
+    char cost[32];
+    std::snprintf(cost, sizeof cost, "%.3g", c.estimate);
+    text += std::to_string(c.index) + "\t" + c.name + "\t" + settings + "\t" + cost + "\n";
+  }
+  return text;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Status records
 
@@ -486,6 +499,8 @@ CaseStatus ReadCaseStatus(const std::string& path) {
         s.exit_status = std::stoi(value);
       else if (key == "wall_s")
         s.wall_s = std::stod(value);
+      else if (key == "bed_cpu_s")
+        s.bed_cpu_s = std::stod(value);
       else if (key == "message")
         s.message = value;
     } catch (const std::exception&) {
@@ -515,6 +530,7 @@ void WriteCaseStatus(const std::string& path, const CaseStatus& s) {
         << "scene_hash: " << s.scene_hash << "\n"
         << "exit_status: " << s.exit_status << "\n"
         << "wall_s: " << s.wall_s << "\n"
+        << "bed_cpu_s: " << s.bed_cpu_s << "\n"
         << "message: " << message << "\n";
     out.flush();
     if (!out) throw std::runtime_error("cannot write " + tmp);
@@ -582,12 +598,14 @@ herr_t CollectAttributeName(hid_t, const char* name, const H5A_info_t*, void* da
 
 // The case's output from its pass files: every series concatenated in pass order, the root
 // attributes of the first pass (the dig's: surface, scoop_mesh, ...), the state hash and time of
-// the last, and the wall and CPU time of each pass. Written beside and renamed into place.
-void MergeParts(const SweepCase& c, const CasePaths& paths) {
+// the last, the wall and CPU time of each pass and the CPU time of the pour (`bed_cpu_s`).
+// Written beside and renamed into place.
+void MergeParts(const SweepCase& c, const CasePaths& paths, double bed_cpu_s) {
   const int passes = c.scene.dig.passes;
   const fs::path tmp = paths.parts / "merged.h5";
   {
     H5Output out(tmp.string(), c.scene.yaml_text, SCOOPSIM_VERSION, 1e9);
+    double cpu_s = 0;
     for (int pass = 1; pass <= passes; ++pass) {
       const std::string part = paths.Pass(pass).string();
       const h5::Handle file = h5::OpenForReading(part, true);
@@ -636,6 +654,7 @@ void MergeParts(const SweepCase& c, const CasePaths& paths) {
       const double cpu = r.ReadDoubleAttribute("/", "cpu_s");
       out.AppendRow("/sweep/pass_wall_s", &wall, 1);
       out.AppendRow("/sweep/pass_cpu_s", &cpu, 1);
+      cpu_s += cpu;
       if (pass == passes) {
         uint64_t hash = 0;
         const h5::Handle a(H5Aopen(root, "state_hash_u64", H5P_DEFAULT), H5Aclose);
@@ -646,6 +665,8 @@ void MergeParts(const SweepCase& c, const CasePaths& paths) {
     }
     out.SetAttribute("sweep_case", c.name);
     out.SetAttribute("sweep_index", static_cast<double>(c.index));
+    out.SetAttribute("sweep_cpu_s", cpu_s);
+    out.SetAttribute("sweep_bed_cpu_s", bed_cpu_s);
     out.Close();
   }
   fs::rename(tmp, paths.h5);
@@ -748,6 +769,7 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
       first_bed = paths.Bed(0).string();
       if (done == 0 && !fs::exists(first_bed)) {
         record("running", 0, "making the bed");
+        const double cpu0 = CpuSeconds();
         World world(scene, threads);
         SettleReport report;
         const int settled = world.Pour(quiet, &report);
@@ -758,6 +780,7 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
           return outcome;
         }
         SaveBed(first_bed, world.system(), scene.yaml_text);
+        status.bed_cpu_s = CpuSeconds() - cpu0;
       }
     }
 
@@ -815,7 +838,7 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
       }
     }
 
-    MergeParts(c, paths);
+    MergeParts(c, paths, status.bed_cpu_s);
     record("done", 0, "");
     fs::remove_all(paths.parts);
     outcome.wall = elapsed();
@@ -883,12 +906,15 @@ void Log::Finished(const SweepCase& c, int rank, const CaseOutcome& outcome) {
 }
 
 int FinishTable(const Sweep& sweep, const SweepOptions& options) {
-  if (!options.build_table) return kExitOk;
+  if (!options.build_table && !options.on_complete) return kExitOk;
   for (const SweepCase& c : sweep.cases)
     if (!CaseDone(c, options.dir)) return kExitOk;  // another process's cases are still running
-  const std::string table = (fs::path(options.dir) / "table.h5").string();
-  const std::string summary = BuildWrenchTable(options.dir, table);
-  Status("scoopsim: sweep: wrote %s (%s)\n", table.c_str(), summary.c_str());
+  if (options.build_table) {
+    const std::string table = (fs::path(options.dir) / "table.h5").string();
+    const std::string summary = BuildWrenchTable(options.dir, table);
+    Status("scoopsim: sweep: wrote %s (%s)\n", table.c_str(), summary.c_str());
+  }
+  if (options.on_complete) options.on_complete();
   return kExitOk;
 }
 

@@ -26,7 +26,9 @@
 // The output folder DIR:
 //   DIR/cases/<name>.h5        the case's run output, as `scoopsim run` writes it (sim/h5_output.h)
 //                              plus root attributes sweep_case, sweep_index and /sweep/pass_wall_s,
-//                              /sweep/pass_cpu_s (one row per pass, wall and CPU seconds);
+//                              /sweep/pass_cpu_s (one row per pass, wall and CPU seconds),
+//                              root attributes sweep_cpu_s (the passes' CPU seconds, all
+//                              threads) and sweep_bed_cpu_s (the pour's, 0 for a saved bed);
 //                              written when the case's last pass is done
 //   DIR/cases/<name>.status    its status record (text, "key: value" lines; written to a
 //                              temporary file and renamed): state (running, done, failed,
@@ -46,6 +48,7 @@
 // output does not depend on the rank that ran it, the rank count or its thread count.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -77,12 +80,20 @@ struct Sweep {
 // expectation): unknown scene key path, empty grid or value list, duplicate or malformed names.
 Sweep LoadSweep(const std::string& path);
 
+// The cases as `scoopsim sweep --list` prints them: a line each, tab-separated: index, name,
+// settings ("key = value, ..."), estimated cost.
+std::string SweepCaseList(const Sweep& sweep);
+
 struct SweepOptions {
   std::string dir = "out/sweep";
   int threads = -1;         // per case; -1: the scene's `threads` (plain) or 1 (a rank of MPI)
   bool quiet = false;       // no progress line of each run (the per-case lines stay)
   int only_case = -1;       // >= 0: run this case alone (no MPI, no table)
   bool build_table = true;  // DIR/table.h5 once every case is done
+  // Called once every case is done, where the table is built (the plain runner, or rank 0 under
+  // MPI before MPI_Finalize; not with only_case), after the table. A study on a sweep's cases
+  // (`study particle-size`) sets a flag here and reads the cases once RunSweep has returned.
+  std::function<void()> on_complete;
 };
 
 // `scoopsim sweep SWEEP.yaml -o DIR`: runs (or resumes) the sweep's cases. Under mpirun (Open
@@ -103,6 +114,7 @@ struct CaseStatus {
   std::string scene_hash;  // FNV-1a 64 of the case's scene text, 16 hex digits
   int exit_status = 0;     // of the last attempt
   double wall_s = 0;       // wall time of the case so far, all attempts [s]
+  double bed_cpu_s = 0;    // CPU time of pouring its bed, all threads [s] (0: a saved bed)
   std::string message;     // what went wrong, if anything
 };
 // Reads a record; state "" when there is none. Throws InputError for a malformed one.

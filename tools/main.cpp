@@ -8,6 +8,8 @@
 //   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
 //   scoopsim study balovnev SCENE [-o OUT.h5] [--phi-deg P] [--delta-deg D] [--buried]
 //                                            the dig against Balovnev's model (table + PNG)
+//   scoopsim study particle-size SCENE [-o DIR] [--sizes A,B] [--beds N] [--case I] [--list]
+//                                            the particle-size study (eq. 5-7; CSV, table, PNGs)
 //   scoopsim sweep SWEEP.yaml -o DIR; scoopsim table build|query|export-csv (tools/sweep_cli.h)
 //   scoopsim arm info URDF [--gravity G]     the parsed arm and its gravity torques
 // Exit status: sim/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
@@ -304,6 +306,43 @@ int Main(int argc, char** argv) {
   balovnev->add_flag("--buried", balovnev_buried, "b = 1: the bucket is buried (default b = 0)");
   balovnev->add_flag("--no-plot", balovnev_no_plot, "Do not draw OUT.balovnev.png");
 
+  // The particle-size study: its cases are a sweep (resumed, MPI, --case), so its options are a
+  // sweep's rather than a run's.
+  std::string size_scene;
+  sim::SizeStudyOptions size_options;
+  bool size_no_plot = false;
+  CLI::App* size = study->add_subcommand(
+      "particle-size",
+      "Particle-size study (paper eq. 5-7, Fig. 3-6): the scene's dig on beds of each diameter "
+      "(the same solid volume), several beds each, run as a sweep; MPE of the smoothed peak "
+      "|F| and |T| against the finest size, the largest size within 20%: DIR/size_study.csv, "
+      "a table on stdout, DIR/size_*.png");
+  size->add_option("SCENE", size_scene,
+                   "A size-study scene: spheres of one diameter, poured, one pass "
+                   "(scenes/paper/size_S10.yaml)")
+      ->required();
+  size->add_option("-o,--output", size_options.dir, "Output folder")->capture_default_str();
+  size->add_option("--sizes", size_options.sizes_mm,
+                   "Diameters [mm], comma separated (default: the study's eq. 5, "
+                   "2,2.5,3.25,4,5.25,6.5,8.25,10)")
+      ->delimiter(',');
+  size->add_option("--beds", size_options.beds, "Independent beds (seeds) per size")
+      ->capture_default_str();
+  size->add_option("--smooth-s", size_options.smooth_s,
+                   "Window of the centred moving mean of |F| and |T| [s]")
+      ->capture_default_str();
+  size->add_option("--case", size_options.only_case,
+                   "Run only case I (0-based, the order of --list): one task of a job array")
+      ->check(CLI::NonNegativeNumber);
+  size->add_option("--threads", size_options.threads,
+                   "DEM threads per case; 0 = all cores (default: the scene's `threads` when "
+                   "plain, 1 per rank under mpirun)")
+      ->check(CLI::Range(0, kMaxThreads));
+  size->add_flag("--list", size_options.list,
+                 "Print the cases (index, name, settings, cost) and exit");
+  size->add_flag("--no-plot", size_no_plot, "Do not draw DIR/size_*.png");
+  size->add_flag("-q,--quiet", size_options.quiet, "No progress line within a case");
+
   CLI::App* bench = app.add_subcommand("bench", "Benchmarks");
   bench->require_subcommand(1);
   CLI::App* settle =
@@ -482,6 +521,10 @@ int Main(int argc, char** argv) {
       options.tool.rake = balovnev_rake * kDeg;
       options.buried = balovnev_buried;
       return sim::RunBalovnevStudy(scene, options);
+    }
+    if (*size) {
+      size_options.plot = !size_no_plot;
+      return sim::RunSizeStudy(size_scene, size_options);
     }
     if (*settle) return sim::BenchSettle(bench_options);
     if (*step) return sim::BenchStep(step_options);

@@ -17,31 +17,18 @@ import sys
 
 import numpy as np
 
+import study_csv
+
 COLUMNS = ("time", "pass", "rho", "tip_x", "tip_y", "tip_z", "surface", "depth", "dem_horizontal",
            "dem_down", "balovnev_horizontal", "balovnev_vertical", "plugin_horizontal",
            "plugin_vertical")
 
 
 def read(path):
-    try:
-        with open(path) as f:
-            lines = f.read().splitlines()
-    except OSError as e:
-        raise ValueError("%s: cannot read: %s" % (path, e.strerror))
+    notes, data = study_csv.read(path, COLUMNS, min_rows=2)
     # The CSV keeps every digit; the figure's notes four significant ones.
     short = lambda m: "%.4g" % float(m.group())
-    notes = [re.sub(r"\d+\.\d{5,}(e[-+]?\d+)?", short, l[1:].strip()) for l in lines
-             if l.startswith("#")]
-    body = [l for l in lines if l and not l.startswith("#")]
-    if not body or tuple(body[0].split(",")) != COLUMNS:
-        raise ValueError("%s: expected the header %s" % (path, ",".join(COLUMNS)))
-    try:
-        data = np.array([[float(v) for v in l.split(",")] for l in body[1:]], dtype=float)
-    except ValueError:
-        raise ValueError("%s: expected numbers in every row" % path)
-    if data.ndim != 2 or data.shape[0] < 2 or data.shape[1] != len(COLUMNS):
-        raise ValueError("%s: expected at least two rows of %d columns" % (path, len(COLUMNS)))
-    return {c: data[:, k] for k, c in enumerate(COLUMNS)}, notes
+    return data, [re.sub(r"\d+\.\d{5,}(e[-+]?\d+)?", short, n) for n in notes]
 
 
 def smooth(y, n):

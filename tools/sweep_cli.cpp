@@ -68,12 +68,7 @@ int SweepCommands::Run() {
   if (*sweep_) {
     const sim::Sweep sweep = sim::LoadSweep(sweep_file_);
     if (list_) {
-      for (const sim::SweepCase& c : sweep.cases) {
-        std::string settings;
-        for (const sim::SweepSetting& s : c.settings)
-          settings += (settings.empty() ? "" : ", ") + s.key + " = " + s.value;
-        std::printf("%d\t%s\t%s\t%.3g\n", c.index, c.name.c_str(), settings.c_str(), c.estimate);
-      }
+      std::fputs(sim::SweepCaseList(sweep).c_str(), stdout);
       return 0;
     }
     sim::SweepOptions options = sweep_options_;

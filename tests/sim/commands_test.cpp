@@ -2,7 +2,7 @@
 // pushed 15 mm through a sparse layer of clumps, once per built-in template. The file holds one
 // group per template with the dig's /scoop rows and the table of spheres, clumps, wall time and
 // force; stderr ends with the table. `scoopsim study balovnev` end to end on the same box pushed
-// through a shallow bed of spheres.
+// through a shallow bed of spheres, and `scoopsim study particle-size` on that bed at two sizes.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "sim/balovnev.h"
+#include "sim/saved_run.h"
+#include "sim/size_study.h"
 #include "tests/cli_util.h"
 
 namespace {
@@ -339,6 +341,88 @@ TEST(BalovnevStudyTest, DeltaAbovePhiIsBadInput) {
       << text;
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
   EXPECT_FALSE(fs::exists(TempDir() / "bad.h5"));
+}
+
+// `study particle-size` end to end on the sphere scene (5 mm sand spheres) at 5 and 6 mm, two
+// beds each (four cases, ~3 s): the cases' files, DIR/size_study.csv (its '#' lines, header and
+// one row per size, the reference's MPE 0), the peaks in it against the case files read again
+// (sim::MakeSizeCurve, the default 0.05 s window; the CSV's 9 digits: relative 1e-8), the table,
+// the three PNGs; a second run (-o DIR/./) skips every case and writes the same CSV.
+TEST(SizeStudyTest, TwoSizesTwoBedsEndToEnd) {
+  const std::string scene = WriteSphereScene();
+  const fs::path dir = TempDir() / "size";
+  const std::string stdout_file = (TempDir() / "size.txt").string();
+  const std::string log = (TempDir() / "size.log").string();
+  const std::string options = " --sizes 5,6 --beds 2 --threads 1 -q";
+  const std::string command =
+      "study particle-size " + scene + " -o " + dir.string() + options + " > " + stdout_file;
+  ASSERT_EQ(scoopsim_test::RunScoopsim(command, log), 0) << scoopsim_test::ReadText(log);
+  const std::string printed = scoopsim_test::ReadText(stdout_file);
+  EXPECT_NE(printed.find("| d [mm] | beds | peak |F| [N] |"), std::string::npos) << printed;
+  EXPECT_NE(printed.find("verdict (eq. 7)"), std::string::npos) << printed;
+  for (const char* png : {"size_force.png", "size_stack.png", "size_mpe.png"})
+    EXPECT_TRUE(fs::exists(dir / png)) << png;
+  EXPECT_TRUE(fs::exists(dir / "size_study.sweep.yaml"));
+  EXPECT_TRUE(fs::exists(dir / "size_curves.csv"));
+
+  const std::string csv = scoopsim_test::ReadText(dir / "size_study.csv");
+  EXPECT_NE(csv.find("\n# verdict: largest_within_20pct_mm="), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\n# smoothing: centred moving mean over 0.05 s"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\n# reference: the finest size, 5 mm"), std::string::npos) << csv;
+  std::vector<std::vector<double>> rows;
+  std::stringstream lines(csv);
+  bool header = false;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    if (!header) {
+      EXPECT_EQ(line, sim::SizeCsvHeader());
+      header = true;
+      continue;
+    }
+    std::vector<double> v;
+    std::stringstream fields(line);
+    for (std::string field; std::getline(fields, field, ',');) v.push_back(std::stod(field));
+    ASSERT_EQ(v.size(), 16u) << line;
+    rows.push_back(v);
+  }
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0][0], 5);
+  EXPECT_EQ(rows[1][0], 6);
+  EXPECT_EQ(rows[0][5], 0);   // mpe_force_pct of the reference
+  EXPECT_EQ(rows[0][11], 0);  // mpe_torque_pct
+  for (size_t k = 0; k < 2; ++k) {
+    SCOPED_TRACE(k);
+    EXPECT_EQ(rows[k][1], 2);
+    double force = 0, torque = 0;
+    for (int bed = 1; bed <= 2; ++bed) {
+      const std::string name = "d" + std::string(k == 0 ? "5" : "6") + "_b" + std::to_string(bed);
+      const sim::SavedRun run((dir / "cases" / (name + ".h5")).string());
+      EXPECT_GT(run.RootNumber("sweep_bed_cpu_s", 0), 0) << name;
+      EXPECT_GT(run.RootNumber("sweep_cpu_s", 0), 0) << name;
+      const sim::SizeCurve c = sim::MakeSizeCurve(run.Scoop(), 0.05);
+      force += c.peak_force / 2;
+      torque += c.peak_torque / 2;
+    }
+    EXPECT_GT(force, 0);
+    EXPECT_NEAR(rows[k][2], force, 1e-8 * force);
+    EXPECT_NEAR(rows[k][8], torque, 1e-8 * torque);
+    EXPECT_GT(rows[k][15], 0);  // cpu_s_mean
+  }
+
+  // Again, the folder spelled otherwise: every case skipped, the same table.
+  const std::string log2 = (TempDir() / "size2.log").string();
+  ASSERT_EQ(scoopsim_test::RunScoopsim("study particle-size " + scene + " -o " + dir.string() +
+                                           "/./" + options + " --no-plot > /dev/null",
+                                       log2),
+            0)
+      << scoopsim_test::ReadText(log2);
+  const std::string again = scoopsim_test::ReadText(log2);
+  size_t skipped = 0;
+  for (size_t at = again.find("skipped"); at != std::string::npos;
+       at = again.find("skipped", at + 1))
+    ++skipped;
+  EXPECT_EQ(skipped, 4u) << again;
+  EXPECT_EQ(scoopsim_test::ReadText(dir / "size_study.csv"), csv);
 }
 
 }  // namespace

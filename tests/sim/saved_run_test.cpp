@@ -74,12 +74,14 @@ void WriteRun(const std::string& path) {
     const dem::Vec3 f = SampleForce(k);
     const dem::Pose q = SamplePose(k);
     const double force[3] = {f.x, f.y, f.z};
+    const double torque[3] = {-f.z, f.x, 2 * f.y};
     const double pose[7] = {q.position.x,    q.position.y,    q.position.z,   q.orientation.w,
                             q.orientation.x, q.orientation.y, q.orientation.z};
     out.AppendRow("/scoop/time", &t, 1);
     out.AppendRow("/scoop/pass", &pass, 1);
     out.AppendRow("/scoop/rho", &rho, 1);
     out.AppendRow("/scoop/force_world", force, 3);
+    out.AppendRow("/scoop/torque_world", torque, 3);
     out.AppendRow("/scoop/pose", pose, 7);
   }
   out.SetAttribute("scoop_mesh", "assets/scoop.stl");
@@ -157,12 +159,15 @@ TEST(SavedRunTest, ReadsBackWhatH5OutputWrote) {
   ASSERT_EQ(scoop.pass.size(), scoop.time.size());
   ASSERT_EQ(scoop.rho.size(), scoop.time.size());
   ASSERT_EQ(scoop.force_world.size(), scoop.time.size());
+  ASSERT_EQ(scoop.torque_world.size(), scoop.time.size());
   ASSERT_EQ(scoop.pose.size(), scoop.time.size());
   for (int k = 0; k < kSamples; ++k) {
     EXPECT_EQ(scoop.time[k], SampleTime(k));
     EXPECT_EQ(scoop.pass[k], k < 2 ? 1 : 2);
     EXPECT_EQ(scoop.rho[k], 0.01 * k);
     EXPECT_TRUE(Same(scoop.force_world[k], SampleForce(k)));
+    const dem::Vec3 f = SampleForce(k);
+    EXPECT_TRUE(Same(scoop.torque_world[k], dem::Vec3{-f.z, f.x, 2 * f.y}));
     EXPECT_TRUE(Same(scoop.pose[k].position, SamplePose(k).position));
     EXPECT_EQ(scoop.pose[k].orientation.w, SamplePose(k).orientation.w);
     EXPECT_EQ(scoop.pose[k].orientation.x, SamplePose(k).orientation.x);

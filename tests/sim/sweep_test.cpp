@@ -143,6 +143,7 @@ TEST(SweepFileTest, StatusRecordRoundTrips) {
   s.clear_z = 1.0 / 3.0;
   s.scene_hash = sim::TextHash("scene");
   s.message = "pass 3";
+  s.bed_cpu_s = 12.25;
   const std::string path = (TempDir() / "x.status").string();
   sim::WriteCaseStatus(path, s);
   const sim::CaseStatus r = sim::ReadCaseStatus(path);
@@ -153,6 +154,7 @@ TEST(SweepFileTest, StatusRecordRoundTrips) {
   EXPECT_EQ(r.clear_z, s.clear_z);
   EXPECT_EQ(r.scene_hash, s.scene_hash);
   EXPECT_EQ(r.message, "pass 3");
+  EXPECT_EQ(r.bed_cpu_s, 12.25);
   EXPECT_EQ(sim::ReadCaseStatus((TempDir() / "none.status").string()).state, "");
 }
 

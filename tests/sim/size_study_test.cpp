@@ -1,0 +1,310 @@
+// The particle-size study's pure functions (sim/size_study.cpp): the smoothing against its
+// definition, a case's curve, eq. 6 and eq. 7 on synthetic curves with known answers, the cases
+// (same solid volume, seeds, skin) and their sweep file, bad --sizes refused with one line.
+#include "sim/size_study.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "sim/sweep.h"
+#include "tests/cli_util.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kSourceDir = SCOOPSIM_SOURCE_DIR;
+
+fs::path TempDir() {
+  static const fs::path dir = scoopsim_test::ProcessTempDir("size_study");
+  return dir;
+}
+
+// ---- Smoothing
+
+// S_i = mean{ y_j : |t_j - t_i| <= w/2 }, written out as the definition reads (every j, in order).
+std::vector<double> MeanByDefinition(const std::vector<double>& t, const std::vector<double>& y,
+                                     double window) {
+  std::vector<double> s(t.size());
+  for (size_t i = 0; i < t.size(); ++i) {
+    double sum = 0;
+    int n = 0;
+    for (size_t j = 0; j < t.size(); ++j) {
+      if (std::abs(t[j] - t[i]) <= window / 2 + 1e-9) {
+        sum += y[j];
+        ++n;
+      }
+    }
+    s[i] = sum / n;
+  }
+  return s;
+}
+
+// Uneven times and a rough signal: the sliding window equals the definition exactly (the same
+// rows summed in the same order), for windows from none to wider than the series.
+TEST(SizeStudySmoothingTest, EqualsItsDefinition) {
+  std::vector<double> t, y;
+  double time = 0;
+  for (int k = 0; k < 300; ++k) {
+    time += 1e-3 * (1 + (k * 7919) % 5);  // steps of 1-5 ms
+    t.push_back(time);
+    y.push_back(std::sin(0.37 * k) * 10 + (k % 11));
+  }
+  for (double window : {0.0, 0.001, 0.01, 0.05, 0.2, 10.0}) {
+    SCOPED_TRACE(window);
+    const std::vector<double> got = sim::CentredMovingMean(t, y, window);
+    const std::vector<double> want = MeanByDefinition(t, y, window);
+    ASSERT_EQ(got.size(), want.size());
+    for (size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i], want[i]) << i;
+  }
+}
+
+// Closed form on rows every 1 ms of y = 3 + 200 t, window 10 ms (11 rows): a centred mean of a
+// line is the line (interior rows, 1e-12); at the first row the window holds rows 0..5 only
+// (one-sided), whose mean is y(2.5 ms) (1e-12); a zero window returns y itself.
+TEST(SizeStudySmoothingTest, LineAndItsEnds) {
+  std::vector<double> t, y;
+  for (int k = 0; k < 100; ++k) {
+    t.push_back(1e-3 * k);
+    y.push_back(3 + 200 * t.back());
+  }
+  const std::vector<double> s = sim::CentredMovingMean(t, y, 0.01);
+  for (int k = 5; k < 95; ++k) EXPECT_NEAR(s[k], y[k], 1e-12) << k;
+  EXPECT_NEAR(s[0], 3 + 200 * 2.5e-3, 1e-12);
+  EXPECT_NEAR(s[99], 3 + 200 * 96.5e-3, 1e-12);
+  EXPECT_EQ(sim::CentredMovingMean(t, y, 0), y);
+}
+
+// ---- A case's curve
+
+// Rows of pass 1 before contact (|F| = 0) are dropped, time starts at first contact, rows of pass
+// 2 are left out; |F| and |T| are norms; the peaks are the smoothed maxima.
+TEST(SizeStudyCurveTest, FromFirstContactOfPassOne) {
+  sim::ScoopSeries s;
+  for (int k = 0; k < 60; ++k) {
+    s.time.push_back(1.0 + 1e-3 * k);
+    s.pass.push_back(k < 50 ? 1 : 2);
+    s.rho.push_back(k < 10 ? 0 : 1e-3 * (k - 10));
+    const double f = k < 10 ? 0 : (k == 30 ? 40 : 4);  // one spike of 40 N among 4 N
+    s.force_world.push_back({0, 0.6 * f, 0.8 * f});
+    s.torque_world.push_back({0.5 * f, 0, 0});
+    s.pose.push_back({});
+  }
+  const sim::SizeCurve c = sim::MakeSizeCurve(s, 0.004);  // 5 rows
+  ASSERT_EQ(c.time.size(), 40u);                          // rows 10..49
+  EXPECT_NEAR(c.time[0], 0, 1e-15);
+  EXPECT_NEAR(c.time[39], 0.039, 1e-12);
+  EXPECT_EQ(c.rho[0], 0);
+  EXPECT_NEAR(c.force[20], 40, 1e-12);
+  EXPECT_NEAR(c.torque[20], 20, 1e-12);
+  // The spike averaged with four rows of 4 N: (40 + 16) / 5.
+  EXPECT_NEAR(c.peak_force, 56.0 / 5, 1e-12);
+  EXPECT_NEAR(c.peak_torque, 28.0 / 5, 1e-12);
+}
+
+// ---- Eq. 6 and eq. 7
+
+// A synthetic dig: |F| a plateau of `force` N over 0.2 s, |T| = force x `lever`, on ramps; the
+// plateau is wider than the window, so the smoothed peak is the plateau exactly.
+sim::SizePeak SyntheticCase(double size_mm, int bed, double force, double lever) {
+  sim::ScoopSeries s;
+  for (int k = 0; k <= 400; ++k) {
+    const double t = 1e-3 * k;
+    const double shape = t < 0.1 ? t / 0.1 : (t <= 0.3 ? 1 : std::max(0.0, (0.4 - t) / 0.1));
+    s.time.push_back(t);
+    s.pass.push_back(1);
+    s.rho.push_back(0.3 * t);
+    s.force_world.push_back({force * shape + 1e-3, 0, 0});
+    s.torque_world.push_back({0, 0, force * lever * shape});
+  }
+  const sim::SizeCurve c = sim::MakeSizeCurve(s, 0.05);
+  return {size_mm, bed, c.peak_force, c.peak_torque, 60.0 * bed};
+}
+
+// One bed each. Eq. 6: MPE = (peak - peak_2mm) / peak_2mm x 100, signed; peaks 10 (2 mm),
+// 11.5 (4 mm: +15%), 7 (6 mm: -30%), lever 0.1 m (torque's MPE the same). Tolerance 1e-9 %.
+TEST(SizeStudyMpeTest, EquationSixOnSyntheticCurves) {
+  const std::vector<sim::SizePeak> peaks = {
+      SyntheticCase(6, 1, 7, 0.1), SyntheticCase(2, 1, 10, 0.1), SyntheticCase(4, 1, 11.5, 0.1)};
+  EXPECT_NEAR(peaks[1].peak_force, 10 + 1e-3, 1e-12);
+  const std::vector<sim::SizeRow> rows = sim::SummarizeSizes(peaks, 20);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0].size_mm, 2);  // ascending; the finest is the reference
+  EXPECT_EQ(rows[1].size_mm, 4);
+  EXPECT_EQ(rows[2].size_mm, 6);
+  EXPECT_EQ(rows[0].mpe_force_pct, 0);
+  EXPECT_NEAR(rows[1].mpe_force_pct, 100 * (11.501 - 10.001) / 10.001, 1e-9);
+  EXPECT_NEAR(rows[1].mpe_torque_pct, 15, 1e-9);
+  EXPECT_NEAR(rows[2].mpe_torque_pct, -30, 1e-9);
+  EXPECT_TRUE(rows[1].within);
+  EXPECT_FALSE(rows[2].within);  // |-30| > 20: the tolerance is on |MPE|
+  EXPECT_EQ(rows[1].cpu_s_mean, 60);
+  EXPECT_EQ(sim::PercentError(12, 10), 20);
+}
+
+// Several beds: peak = the bed mean, MPE against the reference's bed mean, the spread each bed's
+// peak against that mean. 2 mm beds 9 and 11 (mean 10; spread -10, +10 %); 4 mm beds 11 and 12
+// (mean 11.5: +15 %; spread +10, +20 %). Tolerance 1e-12 %.
+TEST(SizeStudyMpeTest, BedMeansAndSpread) {
+  std::vector<sim::SizePeak> peaks = {
+      {2, 1, 9, 0.9, 10}, {2, 2, 11, 1.1, 30}, {4, 1, 11, 1.0, 5}, {4, 2, 12, 1.3, 7}};
+  const std::vector<sim::SizeRow> rows = sim::SummarizeSizes(peaks, 20);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].beds, 2);
+  EXPECT_NEAR(rows[0].peak_force_mean, 10, 1e-12);
+  EXPECT_NEAR(rows[0].mpe_force_min_pct, -10, 1e-12);
+  EXPECT_NEAR(rows[0].mpe_force_max_pct, 10, 1e-12);
+  EXPECT_EQ(rows[0].cpu_s_mean, 20);
+  EXPECT_NEAR(rows[1].peak_force_mean, 11.5, 1e-12);
+  EXPECT_EQ(rows[1].peak_force_min, 11);
+  EXPECT_EQ(rows[1].peak_force_max, 12);
+  EXPECT_NEAR(rows[1].mpe_force_pct, 15, 1e-12);
+  EXPECT_NEAR(rows[1].mpe_force_min_pct, 10, 1e-12);
+  EXPECT_NEAR(rows[1].mpe_force_max_pct, 20, 1e-12);
+  EXPECT_NEAR(rows[1].mpe_torque_pct, 15, 1e-12);      // 1.15 against 1.0
+  EXPECT_NEAR(rows[1].mpe_torque_max_pct, 30, 1e-12);  // 1.3: one bed outside
+  EXPECT_TRUE(rows[1].within);
+  EXPECT_FALSE(rows[1].within_spread);
+}
+
+sim::SizeRow Row(double size, double mpe_force, double mpe_torque, bool spread_ok = true) {
+  sim::SizeRow r;
+  r.size_mm = size;
+  r.mpe_force_pct = mpe_force;
+  r.mpe_torque_pct = mpe_torque;
+  r.within = std::abs(mpe_force) <= 20 && std::abs(mpe_torque) <= 20;
+  r.within_spread = r.within && spread_ok;
+  return r;
+}
+
+// Eq. 7: the largest d with every size from the reference up to d within 20 % for force and
+// torque. 3 mm within, 4 mm out on torque alone (+25 %), 5 mm within by chance: 3 mm, not 5.
+// With the spread: 3 mm's beds are not all within, so 2 mm (the reference always counts).
+TEST(SizeStudyMpeTest, EquationSevenLargestConvergedSize) {
+  const std::vector<sim::SizeRow> rows = {Row(2, 0, 0), Row(3, 12, -19.9, false), Row(4, 5, 25),
+                                          Row(5, 3, 3)};
+  EXPECT_EQ(sim::LargestWithin(rows, false), 3);
+  EXPECT_EQ(sim::LargestWithin(rows, true), 2);
+  // All within: the coarsest; exactly 20 % counts as within (<=).
+  EXPECT_EQ(sim::LargestWithin({Row(2, 0, 0), Row(3, 20, -20), Row(8, -1, 1)}, false), 8);
+  // Nothing above the reference within: the reference.
+  EXPECT_EQ(sim::LargestWithin({Row(2, 0, 0), Row(3, -21, 0)}, false), 2);
+}
+
+TEST(SizeStudyMpeTest, ReferenceWithoutForceIsRefused) {
+  EXPECT_THROW(sim::SummarizeSizes({{2, 1, 0, 1, 0}, {4, 1, 3, 1, 0}}, 20), std::invalid_argument);
+  EXPECT_THROW(sim::SummarizeSizes({}, 20), std::invalid_argument);
+}
+
+// The CSV's columns, exactly as the report reads them.
+TEST(SizeStudyMpeTest, CsvColumns) {
+  EXPECT_EQ(sim::SizeCsvHeader(),
+            "size_mm,beds,peak_force_mean,peak_force_min,peak_force_max,mpe_force_pct,"
+            "mpe_force_min_pct,mpe_force_max_pct,peak_torque_mean,peak_torque_min,"
+            "peak_torque_max,mpe_torque_pct,mpe_torque_min_pct,mpe_torque_max_pct,within_20,"
+            "cpu_s_mean");
+  sim::SizeRow r = Row(8.25, 12.5, -3);
+  r.beds = 2;
+  const std::string line = sim::SizeCsvLine(r);
+  EXPECT_EQ(std::count(line.begin(), line.end(), ','), 15) << line;
+  EXPECT_EQ(line.rfind("8.25,2,", 0), 0u) << line;
+}
+
+// ---- Cases
+
+// size_S10.yaml (15369 spheres of 10 mm, skin 2.5 mm, seed 1) at 10, 5 and 2.5 mm, two beds: the
+// count x (10/d)^3 (the same solid volume to rounding: relative 1e-6), skin x d/10, seeds 1 and 2,
+// names d<mm>_b<bed>; the sweep file of these cases loads, and its scenes hold the values.
+TEST(SizeStudyCasesTest, SameVolumeScaledSkinSeedsDiffer) {
+  const sim::Scene base = sim::LoadScene(kSourceDir + "/scenes/paper/size_S10.yaml");
+  const std::vector<sim::SizeCase> cases = sim::SizeCases(base, {10, 5, 2.5}, 2);
+  ASSERT_EQ(cases.size(), 6u);
+  const double d0 = 0.010;
+  for (const sim::SizeCase& c : cases) {
+    SCOPED_TRACE(c.name);
+    const double d = c.size_mm / 1000;
+    EXPECT_EQ(c.radius, d / 2);
+    EXPECT_EQ(c.count, std::llround(15369 * std::pow(d0 / d, 3)));
+    EXPECT_NEAR(c.count * d * d * d, 15369 * d0 * d0 * d0, 1e-6 * 15369 * d0 * d0 * d0);
+    EXPECT_NEAR(c.skin, 0.0025 * d / d0, 1e-15);
+    EXPECT_EQ(c.seed, static_cast<uint64_t>(c.bed));
+  }
+  EXPECT_EQ(cases[0].name, "d10_b1");
+  EXPECT_EQ(cases[1].name, "d10_b2");
+  EXPECT_EQ(cases[5].name, "d2.5_b2");
+  EXPECT_EQ(cases[2].count, 15369 * 8);
+  EXPECT_NE(cases[2].seed, cases[3].seed);
+
+  const fs::path sweep_file = TempDir() / "size.sweep.yaml";
+  std::ofstream(sweep_file) << sim::SizeSweepText(kSourceDir + "/scenes/paper/size_S10.yaml",
+                                                  cases);
+  const sim::Sweep sweep = sim::LoadSweep(sweep_file.string());
+  ASSERT_EQ(sweep.cases.size(), 6u);
+  for (size_t k = 0; k < 6; ++k) {
+    const sim::Scene& s = sweep.cases[k].scene;
+    EXPECT_EQ(sweep.cases[k].name, cases[k].name);
+    EXPECT_EQ(s.bed.radius_max, cases[k].radius);
+    EXPECT_EQ(s.bed.count, cases[k].count);
+    EXPECT_EQ(s.bed.seed, cases[k].seed);
+    EXPECT_EQ(s.skin, cases[k].skin);
+    EXPECT_EQ(s.bed.material, base.bed.material);
+  }
+}
+
+// A scene whose skin is the default (a quarter diameter) gets no neighbor.skin: it scales alone.
+TEST(SizeStudyCasesTest, DefaultSkinIsLeftToTheScene) {
+  sim::Scene base = sim::LoadScene(kSourceDir + "/scenes/paper/size_S10.yaml");
+  base.skin_given = false;
+  const std::vector<sim::SizeCase> cases = sim::SizeCases(base, {10, 4}, 1);
+  EXPECT_EQ(cases[1].skin, 0);
+  EXPECT_EQ(sim::SizeSweepText("x.yaml", cases).find("neighbor.skin"), std::string::npos);
+}
+
+// Scenes the study cannot vary, and bad sizes or beds: InputError naming the key.
+TEST(SizeStudyCasesTest, BadScenesAndSizesAreRefused) {
+  const sim::Scene base = sim::LoadScene(kSourceDir + "/scenes/paper/size_S10.yaml");
+  const auto key_of = [](auto make) {
+    try {
+      make();
+    } catch (const sim::InputError& e) {
+      return e.key();
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_EQ(key_of([&] { sim::SizeCases(base, {10}, 1); }), "--sizes");
+  EXPECT_EQ(key_of([&] { sim::SizeCases(base, {10, 0}, 1); }), "--sizes");
+  EXPECT_EQ(key_of([&] { sim::SizeCases(base, {10, NAN}, 1); }), "--sizes");
+  EXPECT_EQ(key_of([&] { sim::SizeCases(base, {10, 4, 10}, 1); }), "--sizes");
+  EXPECT_EQ(key_of([&] { sim::SizeCases(base, {10, 4}, 0); }), "--beds");
+  const sim::Scene shape = sim::LoadScene(kSourceDir + "/scenes/paper/shape_study.yaml");
+  EXPECT_EQ(key_of([&] { sim::SizeCases(shape, {10, 4}, 1); }), "bed.clump");
+  const sim::Scene two_passes = sim::LoadScene(kSourceDir + "/scenes/sweeps/tiny_scene.yaml");
+  EXPECT_EQ(key_of([&] { sim::SizeCases(two_passes, {10, 4}, 1); }), "dig.passes");
+  const sim::Scene saved_bed = sim::LoadScene(kSourceDir + "/scenes/paper/lut_snow_b15.yaml");
+  EXPECT_NE(key_of([&] { sim::SizeCases(saved_bed, {10, 4}, 1); }), "(no error)");
+}
+
+// A bad --sizes on the command line: one line naming the option and what was expected, exit 2,
+// before any work (no output folder).
+TEST(SizeStudyCasesTest, BadSizesOnTheCommandLineExitTwo) {
+  const std::string scene = kSourceDir + "/scenes/paper/size_S10.yaml";
+  for (const std::string sizes : {"10,-2", "10", "10,abc", "10,8,10"}) {
+    SCOPED_TRACE(sizes);
+    const fs::path out = TempDir() / "cli_bad";
+    const std::string log = (TempDir() / "cli_bad.log").string();
+    EXPECT_EQ(
+        scoopsim_test::RunScoopsim(
+            "study particle-size " + scene + " -o " + out.string() + " --sizes " + sizes, log),
+        2);
+    const std::string text = scoopsim_test::ReadText(log);
+    EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+    EXPECT_NE(text.find("--sizes"), std::string::npos) << text;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+}  // namespace

@@ -1,0 +1,81 @@
+#!/usr/bin/python3
+"""tools/plot_size_study.py on synthetic files of `scoopsim study particle-size`'s layout (three
+sizes, two beds each): writes the three PNGs; a folder without the files, a CSV with another
+header, rows that are not numbers or no verdict line: one line, exit 2."""
+
+import os
+import subprocess
+import sys
+
+from cli_check import expect_refused, test_dir
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+SCRIPT = os.path.join(ROOT, "tools", "plot_size_study.py")
+STUDY = ("size_mm,beds,peak_force_mean,peak_force_min,peak_force_max,mpe_force_pct,"
+         "mpe_force_min_pct,mpe_force_max_pct,peak_torque_mean,peak_torque_min,peak_torque_max,"
+         "mpe_torque_pct,mpe_torque_min_pct,mpe_torque_max_pct,within_20,cpu_s_mean")
+CURVES = "size_mm,bed,time,rho,force,torque,force_smooth,torque_smooth"
+PNGS = ("size_force.png", "size_stack.png", "size_mpe.png")
+
+
+def write_study(d, header=STUDY, verdict=True, rows=None):
+    with open(os.path.join(d, "size_study.csv"), "w") as f:
+        f.write("# scoopsim study particle-size x.yaml\n# smoothing: centred moving mean over 0.05 s\n")
+        if verdict:
+            f.write("# verdict: largest_within_20pct_mm=4\n")
+        f.write(header + "\n")
+        for row in rows or (
+                "2,2,10,9,11,0,-10,10,1,0.9,1.1,0,-10,10,1,60",
+                "4,2,11.5,11,12,15,10,20,1.15,1.1,1.2,15,10,20,1,20",
+                "6,2,14,13,15,40,30,50,1.5,1.4,1.6,50,40,60,0,8"):
+            f.write(row + "\n")
+
+
+def write_curves(d):
+    with open(os.path.join(d, "size_curves.csv"), "w") as f:
+        f.write("# curves\n" + CURVES + "\n")
+        for size, peak in ((2, 10), (4, 11.5), (6, 14)):
+            for bed in (1, 2):
+                for k in range(300 + 7 * bed):
+                    t = 1e-3 * k
+                    shape = min(1.0, t / 0.1)
+                    f.write("%g,%d,%g,%g,%g,%g,%g,%g\n" % (size, bed, t, 0.3 * t, peak * shape + bed,
+                                                          0.1 * peak * shape, peak * shape,
+                                                          0.1 * peak * shape))
+
+
+def main():
+    run = lambda args: subprocess.run([sys.executable, SCRIPT] + args, capture_output=True,
+                                      text=True)
+    with test_dir("plot_size_study") as d:
+        write_study(d)
+        write_curves(d)
+        r = run([d])
+        assert r.returncode == 0, r.stderr
+        for png in PNGS:
+            with open(os.path.join(d, png), "rb") as f:
+                assert f.read(8) == b"\x89PNG\r\n\x1a\n", png
+        empty = os.path.join(d, "empty")
+        os.mkdir(empty)
+        other = os.path.join(d, "other")
+        os.mkdir(other)
+        write_study(other, header="size_mm,force")
+        write_curves(other)
+        words = os.path.join(d, "words")
+        os.mkdir(words)
+        write_study(words, rows=["x," * 15 + "x"])
+        write_curves(words)
+        no_verdict = os.path.join(d, "no_verdict")
+        os.mkdir(no_verdict)
+        write_study(no_verdict, verdict=False)
+        write_curves(no_verdict)
+        expect_refused(run, (([empty], "cannot read"),
+                             ([other], "expected the header"),
+                             ([words], "expected numbers"),
+                             ([no_verdict], "expected a line '# verdict")))
+    print("plot_size_study_test: 3 plots written, 4 bad inputs refused with exit 2")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
