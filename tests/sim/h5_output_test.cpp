@@ -837,21 +837,25 @@ TEST_F(H5Test, BedLoadAppendsWithFreshIds) {
   ExpectSameVec(c[2].shear, dem::Vec3{1e-6, -2e-6, 3e-7});
 }
 
+// The small bed saved at `path` with /particles/awake added: particle 2 (0.03 m up, touching
+// nothing) sleeps, 0 and 1 are awake.
+void SaveSmallBedWithASleeper(const std::string& path) {
+  dem::System saved(OneMaterial(), SmallConfig());
+  FillSmallBed(&saved);
+  SaveBed(path, saved, "");
+  Handle file = OpenFile(path, H5F_ACC_RDWR);
+  Handle particles(H5Gopen2(file.get(), "/particles", H5P_DEFAULT), H5Gclose);
+  const uint8_t awake[3] = {1, 1, 0};
+  h5::WriteArray(particles.get(), "awake", H5T_STD_U8LE, H5T_NATIVE_UINT8, awake, 3, 1);
+}
+
 // A bed with /particles/awake (bench/dig_state.py's mid-dig states) comes back with those
 // particles asleep, at rest (v = w = 0, as System puts a particle to sleep), and with sleeping on
 // a sleeper far from everything stays where it is, bit for bit, while the awake ones move; the
 // other fields load as they were saved. A flag array of the wrong length is refused naming it.
 TEST_F(H5Test, BedLoadRestoresSleepingParticles) {
   const std::string path = Path("sleeping_bed.h5");
-  {
-    dem::System saved(OneMaterial(), SmallConfig());
-    FillSmallBed(&saved);
-    SaveBed(path, saved, "");
-    Handle file = OpenFile(path, H5F_ACC_RDWR);
-    Handle particles(H5Gopen2(file.get(), "/particles", H5P_DEFAULT), H5Gclose);
-    const uint8_t awake[3] = {1, 1, 0};  // particle 2 (0.03 m up, touching nothing) sleeps
-    h5::WriteArray(particles.get(), "awake", H5T_STD_U8LE, H5T_NATIVE_UINT8, awake, 3, 1);
-  }
+  SaveSmallBedWithASleeper(path);
   dem::System loaded(OneMaterial(), SmallConfig());
   LoadBed(path, &loaded);
   dem::SleepConfig sleep;
@@ -904,15 +908,7 @@ TEST_F(H5Test, BedLoadRestoresSleepingParticles) {
 // particles' forces are saved as they are, bit for bit.
 TEST_F(H5Test, BedSavesASleepersForceAsZero) {
   const std::string path = Path("sleeping_bed2.h5");
-  {
-    dem::System saved(OneMaterial(), SmallConfig());
-    FillSmallBed(&saved);
-    SaveBed(path, saved, "");
-    Handle file = OpenFile(path, H5F_ACC_RDWR);
-    Handle particles(H5Gopen2(file.get(), "/particles", H5P_DEFAULT), H5Gclose);
-    const uint8_t awake[3] = {1, 1, 0};  // particle 2 sleeps
-    h5::WriteArray(particles.get(), "awake", H5T_STD_U8LE, H5T_NATIVE_UINT8, awake, 3, 1);
-  }
+  SaveSmallBedWithASleeper(path);
   dem::System sleeping(OneMaterial(), SmallConfig());
   LoadBed(path, &sleeping);
   dem::Particles& p = sleeping.mutable_particles();
