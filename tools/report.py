@@ -222,6 +222,20 @@ def need_columns(path, rows, columns):
 
 # The sections. Each returns its body's HTML, or None when its files are missing.
 
+def dig_phrase(scene_text):
+    """What the study's scene digs, from its trajectory preset (sim/scene.cpp: table1, table4 or
+    none), for a sentence's start."""
+    m = re.search(r"\bpreset:\s*([A-Za-z0-9_]+)", scene_text)
+    preset = m.group(1) if m else ""
+    if preset == "table1":
+        return "The Table 1 dig"
+    if preset == "table4":
+        return "The Table 4 pass"
+    if "start_buried: true" in scene_text:
+        return "The scene's dig (the scoop starts buried, no preset trajectory)"
+    return "The scene's dig (its own trajectory, no preset)"
+
+
 def shape_section(rep):
     path = rep.path("shape", "shape.h5")
     if not os.path.isfile(path):
@@ -234,6 +248,8 @@ def shape_section(rep):
                                  "output)" % path)
             columns = {k: np.asarray(f["table"][k][()]) for k in f["table"]}
             templates = str(f.attrs.get("templates", "")).split(",")
+            scene_text = f.attrs.get("scene_yaml", "")
+            scene_text = scene_text.decode() if isinstance(scene_text, bytes) else str(scene_text)
     except OSError as e:
         raise InputError("%s: cannot open as HDF5 (%s)" % (path, e))
     # /table's columns as `study shape` prints them: header, format.
@@ -255,10 +271,10 @@ def shape_section(rep):
         study = STUDY_SHAPE_HOURS.get(t)
         rows.append([t] + [cell(c, columns[c][k]) for c in names] +
                     ["%g" % study if study is not None else "-"])
-    body = ("<p>The Table 1 dig once per clump template, each on its own bed of the same solid "
+    body = ("<p>%s once per clump template, each on its own bed of the same solid "
             "volume (paper section 4, Table 3, Fig. 8). peak/mean force: |F| in the world frame, "
             "the mean after first contact; peak overlap: the deepest overlap over the dig's "
-            "steps.</p>")
+            "steps.</p>") % esc(dig_phrase(scene_text))
     body += table(["template"] + [shown[c][0] if c in shown else c for c in names] +
                   ["the study's time [h] (Table 3)"], rows)
     body += rep.figure("shape", os.path.join("shape", "shape_force.png"),

@@ -61,6 +61,9 @@ def write_shape(path):
     with h5py.File(path, "w") as f:
         f.attrs["study"] = "shape"
         f.attrs["templates"] = "tetra1,tetra4"
+        # A level push with the scoop buried, as scenes/shape_study_small.yaml: no preset.
+        f.attrs["scene_yaml"] = ("dig:\n  trajectory:\n    preset: none\n"
+                                 "  start_buried: true\n")
         n = 50
         for k, t in enumerate(("tetra1", "tetra4")):
             g = f.create_group(t)
@@ -184,6 +187,9 @@ def main():
                      "<td>2.3</td>")
         assert shape_row in page.replace(' class="l"', ""), "the shape table"
         shape = page[page.index('id="shape"'):page.index('id="size"')]
+        # The section names the scene's own dig, not the Table 1 dig it did not run.
+        assert "The scene&#x27;s dig (the scoop starts buried, no preset trajectory)" in shape \
+            and "Table 1" not in shape, shape
         assert ("Made by (commands.txt):</p><pre>build/scoopsim study shape "
                 "scenes/shape_study_small.yaml -o results/shape/shape.h5</pre>") in shape, shape
         lookup = page[page.index('id="lookup"'):]
