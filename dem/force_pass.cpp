@@ -496,21 +496,56 @@ void ComputeForces(Workspace& m, Particles& p, const SystemConfig& config, int n
   m.inv_spin_kicked = false;
   if (m.batches.size() < static_cast<size_t>(nt)) m.batches.resize(nt);
 
+  // Each thread takes one contiguous run of the even slabs, then of the odd ones (see neighbor.h
+  // for why the two phases are race-free and deterministic), split by the slabs' weights, so the
+  // same thread meets the same particles step after step and their data stays in its core's
+  // cache; the kicks' static schedule over the particles (sorted by slab) mostly agrees with it.
+  // A thread done with its run takes the next slabs of the others' (the weights are not the
+  // time: touching pairs cost more than near ones, and a core may be busy with another job).
+  // No result depends on who makes a slab's sums. Measured against a heaviest-first dynamic
+  // schedule: journal section 12.
+  const bool weighed = m.slab_weight.size() == static_cast<size_t>(nslabs);
+  SlabRuns::Run* runs = m.slab_runs.Get(2 * nt);
+  for (int phase = 0; phase < 2; ++phase) {      // phase p's slabs are p, p + 2, ...: position k
+    const int count = (nslabs - phase + 1) / 2;  // is slab phase + 2 k
+    int64_t total = 0;
+    for (int k = 0; k < count; ++k) total += weighed ? m.slab_weight[phase + 2 * k] : 1;
+    int64_t before = 0;  // the weight of the slabs before position k
+    int owner = 0;       // each run starts where its share of the total weight starts
+    for (int r = 0; r < nt; ++r) runs[phase * nt + r].next.store(count, std::memory_order_relaxed);
+    for (int k = 0; k < count; ++k) {
+      const int64_t w = weighed ? m.slab_weight[phase + 2 * k] : 1;
+      // The slab goes to the run whose share holds its weight's midpoint.
+      const int r =
+          total > 0
+              ? static_cast<int>(std::min<int64_t>(nt - 1, ((2 * before + w) * nt) / (2 * total)))
+              : 0;
+      for (; owner <= r; ++owner) runs[phase * nt + owner].next.store(k, std::memory_order_relaxed);
+      before += w;
+    }
+    for (int r = 0; r < nt; ++r)
+      runs[phase * nt + r].end =
+          r + 1 < nt ? runs[phase * nt + r + 1].next.load(std::memory_order_relaxed) : count;
+  }
 #pragma omp parallel num_threads(nt)
   {
-    // Even slabs, then odd slabs (see neighbor.h for why this is race-free and deterministic).
+    const int t = omp_get_thread_num();
     for (int phase = 0; phase < 2; ++phase) {
-      const int first = phase == 0 ? 0 : m.odd_from, last = phase == 0 ? m.odd_from : nslabs;
-#pragma omp for schedule(dynamic, 1)
-      for (int at_slab = first; at_slab < last; ++at_slab) {
-        const int s = m.slab_order[at_slab];  // heaviest first (BuildNear)
-        SlabTally tally;
-        SlabPairForces(arrays, m, s, m.batches[omp_get_thread_num()], &tally);
-        SlabPlaneForces(arrays, m, s, m.slab_plane_force.data() + static_cast<size_t>(s) * np,
-                        &tally);
-        m.slab_overlap[s] = tally.worst;
-        m.slab_contacts[s] = tally.touching;
-        m.slab_wall_contacts[s] = tally.wall_touching;
+      for (int d = 0; d < nt; ++d) {  // its own run, then what is left of the others'
+        SlabRuns::Run& run = runs[phase * nt + (t + d) % nt];
+        for (int k; (k = run.next.fetch_add(1, std::memory_order_relaxed)) < run.end;) {
+          const int s = phase + 2 * k;
+          SlabTally tally;
+          SlabPairForces(arrays, m, s, m.batches[t], &tally);
+          SlabPlaneForces(arrays, m, s, m.slab_plane_force.data() + static_cast<size_t>(s) * np,
+                          &tally);
+          m.slab_overlap[s] = tally.worst;
+          m.slab_contacts[s] = tally.touching;
+          m.slab_wall_contacts[s] = tally.wall_touching;
+        }
+      }
+      if (phase == 0) {
+#pragma omp barrier
       }
     }
   }

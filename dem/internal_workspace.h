@@ -5,8 +5,10 @@
 // (dem/internal_phases.h) are plain functions over this struct.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "dem/contact.h"
@@ -128,6 +130,31 @@ struct MeshState {
 
 // The System's working data (see the top of this file). Array shapes: N particles in storage
 // order, num_pairs list pairs, slabs of the neighbour grid.
+// The force pass's per-thread runs of slabs (ComputeForces): run r hands out the positions next,
+// next + 1, ... below end, to its own thread first and then to any thread that finished its own.
+// Scratch, not state: a copy starts empty.
+class SlabRuns {
+ public:
+  struct alignas(64) Run {  // one cache line each: a thread's claims do not slow another's
+    std::atomic<int32_t> next{0};
+    int32_t end = 0;
+  };
+  SlabRuns() = default;
+  SlabRuns(const SlabRuns&) {}
+  SlabRuns& operator=(const SlabRuns&) { return *this; }
+  Run* Get(int n) {  // at least n runs
+    if (n > size_) {
+      runs_ = std::make_unique<Run[]>(n);
+      size_ = n;
+    }
+    return runs_.get();
+  }
+
+ private:
+  std::unique_ptr<Run[]> runs_;
+  int size_ = 0;
+};
+
 struct Workspace {
   Stale stale;
 
@@ -173,10 +200,10 @@ struct Workspace {
   double near_skin = 0;                     // [m]
   double near_bound = 0;                    // [m]
   int64_t near_builds = 0, near_pairs = 0;  // near_pairs: the slots in use
-  // The force pass's slab order: the even slabs, then (from odd_from) the odd ones, each phase
-  // heaviest first (BuildNear).
-  std::vector<int32_t> slab_order;
-  int odd_from = 0;
+  // The force pass's work in each slab (BuildNear): its slots plus its visited particles. Each
+  // thread takes one contiguous run of each phase's slabs, split by these weights (ComputeForces).
+  std::vector<int64_t> slab_weight;
+  SlabRuns slab_runs;
 
   // Particle-plane contacts near enough to matter (rebuilt with the list), sorted by particle;
   // particle i owns entries wall_start[i] .. wall_start[i + 1].

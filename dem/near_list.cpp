@@ -154,16 +154,15 @@ void FindNearPairs(Workspace& m, const Particles& p, bool sleeping, int nt) {
   }
 }
 
-// 2. Places each visited particle's slots (near_off), slab after slab in visiting order, and sets
-// the force pass's slab order: each phase's slabs heaviest first, so that the last ones, those
-// that may leave a thread waiting, are light (with sleeping the work sits in a few slabs).
-// Returns the number of slots.
+// 2. Places each visited particle's slots (near_off), slab after slab in visiting order, and
+// weighs each slab's work for the force pass (slab_weight: its slots and its particles). Returns
+// the number of slots.
 int64_t PlaceSlots(Workspace& m, bool sleeping) {
   const int ns = m.list.num_slabs();
   const int32_t* busy = m.busy.data();
   const int32_t* near_count = m.near_count.data();
   int32_t* near_off = m.near_off.data();
-  std::vector<int64_t> weight(ns);
+  m.slab_weight.assign(ns, 0);
   int64_t slots = 0;
   for (int sl = 0; sl < ns; ++sl) {
     const int64_t lo = sleeping ? m.slab_busy[sl] : m.list.slab_start[sl];
@@ -174,16 +173,8 @@ int64_t PlaceSlots(Workspace& m, bool sleeping) {
       near_off[i] = static_cast<int32_t>(slots);
       slots += near_count[i];
     }
-    weight[sl] = slots - before + (hi - lo);  // the force pass's work: pairs and particles
+    m.slab_weight[sl] = slots - before + (hi - lo);
   }
-  m.slab_order.resize(ns);
-  for (int sl = 0; sl < ns; ++sl) m.slab_order[sl] = sl;
-  const auto phase_end = std::stable_partition(m.slab_order.begin(), m.slab_order.end(),
-                                               [](int32_t sl) { return sl % 2 == 0; });
-  const auto heavier = [&](int32_t a, int32_t b) { return weight[a] > weight[b]; };
-  std::stable_sort(m.slab_order.begin(), phase_end, heavier);
-  std::stable_sort(phase_end, m.slab_order.end(), heavier);
-  m.odd_from = static_cast<int>(phase_end - m.slab_order.begin());
   return slots;
 }
 

@@ -61,8 +61,7 @@ void WorkspaceFields(Archive& a, internal::Workspace& m) {
   a(m.near_bound);
   a(m.near_builds);
   a(m.near_pairs);
-  a(m.slab_order);
-  a(m.odd_from);
+  a(m.slab_weight);
   for (auto* v : {&m.wall_start, &m.wall_i, &m.wall_k}) a(*v);
   a(m.wall_shear);
   a(m.slab_plane_force);

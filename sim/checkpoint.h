@@ -20,7 +20,8 @@
 
 namespace sim {
 
-constexpr int kCheckpointFormat = 1;
+// 2 (2026-12-03): the workspace keeps the force pass's slab weights instead of its slab order.
+constexpr int kCheckpointFormat = 2;
 
 struct Checkpoint {
   std::string scene_path, scene_yaml;
