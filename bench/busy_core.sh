@@ -3,7 +3,8 @@
 # one core held by a fixed busy loop (a shell spinning `while :; do :; done`, not pinned: the
 # scheduler places it, as another user's job; started 0.5 s before the run), interleaved: each round runs every binary in every
 # configuration (1 thread quiet, 2 quiet, 1 busy, 2 busy). Prints each run's wall time and
-# phases, then per binary the medians, ranges and the ratios 2-busy / 1-quiet, 2-busy / 1-busy
+# phases (the wall time as simulated / the printed real-time factor: 3 digits), then per binary
+# the medians, ranges and the ratios 2-busy / 1-quiet, 2-busy / 1-busy
 # and 1-quiet / 2-quiet (the 2-thread speedup); appends one CSV row per run.
 #
 #   BINS="/tmp/scoopsim_busy_base build/scoopsim" bench/busy_core.sh
@@ -57,11 +58,18 @@ run_one() {
   local hash
   hash=$(/usr/bin/python3 -c "import h5py,sys; print(h5py.File(sys.argv[1],'r').attrs['state_hash'])" "$out" 2>/dev/null || echo -)
   awk -v hash="$hash" '
+    # The dig wall time to 3 digits: simulated time / the printed real-time factor (the
+    # printed wall time has one decimal: 2-4% steps on these runs).
+    /scoopsim: dig: .* s simulated/ {
+      for (i = 1; i <= NF; ++i) if ($(i+1) == "s" && $(i+2) ~ /^simulated/) sim = $i
+    }
     /scoopsim: dig: .* s wall/ {
       for (i = 1; i <= NF; ++i) {
         if ($(i+1) == "s" && $(i+2) == "wall") wall = $i
+        if ($(i+1) == "x" && $(i+2) == "real") { rtf = $i; sub("[(]", "", rtf) }
         if ($i == "pairs" || $i == "integrate" || $i == "mesh" || $i == "near" || $i == "rebuild") t[$i] = $(i+1)
       }
+      if (sim != "" && rtf + 0 > 0) wall = sprintf("%.4g", sim / rtf)
     }
     /scoopsim: threads:/ { for (i = 1; i <= NF; ++i) if ($i == "on") { f = $(i+1); sub("%", "", f) } }
     END { printf "%s %s %s %s %s %s %s %s\n", wall, t["pairs"], t["integrate"], t["mesh"], t["near"], t["rebuild"], (f == "" ? "-" : f), hash }' "$log"
