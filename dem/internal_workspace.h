@@ -128,8 +128,6 @@ struct MeshState {
   MeshWrench wrench;
 };
 
-// The System's working data (see the top of this file). Array shapes: N particles in storage
-// order, num_pairs list pairs, slabs of the neighbour grid.
 // The force pass's per-thread runs of slabs (ComputeForces): run r hands out the positions next,
 // next + 1, ... below end, to its own thread first and then to any thread that finished its own.
 // Scratch, not state: a copy starts empty.
@@ -155,6 +153,8 @@ class SlabRuns {
   int size_ = 0;
 };
 
+// The System's working data (see the top of this file). Array shapes: N particles in storage
+// order, num_pairs list pairs, slabs of the neighbour grid.
 struct Workspace {
   Stale stale;
 
