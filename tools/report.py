@@ -220,6 +220,11 @@ def need_columns(path, rows, columns):
         raise InputError("%s: missing column %s" % (path, ", ".join(missing)))
 
 
+def h5_text(value):
+    """An HDF5 string (attribute or dataset element) as str: h5py gives bytes or str."""
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
 # The sections. Each returns its body's HTML, or None when its files are missing.
 
 def dig_phrase(scene_text):
@@ -248,8 +253,7 @@ def shape_section(rep):
                                  "output)" % path)
             columns = {k: np.asarray(f["table"][k][()]) for k in f["table"]}
             templates = str(f.attrs.get("templates", "")).split(",")
-            scene_text = f.attrs.get("scene_yaml", "")
-            scene_text = scene_text.decode() if isinstance(scene_text, bytes) else str(scene_text)
+            scene_text = h5_text(f.attrs.get("scene_yaml", ""))
     except OSError as e:
         raise InputError("%s: cannot open as HDF5 (%s)" % (path, e))
     # /table's columns as `study shape` prints them: header, format.
@@ -435,11 +439,10 @@ def lookup_table_summary(path):
     if not os.path.isfile(path):
         return ""
     import h5py
-    text = lambda v: v.decode() if isinstance(v, bytes) else str(v)
     try:
         with h5py.File(path, "r") as f:
-            materials = [text(v) for v in f["materials/name"][()]]
-            sizes = [text(v) for v in f["materials/particle_size"][()]] \
+            materials = [h5_text(v) for v in f["materials/name"][()]]
+            sizes = [h5_text(v) for v in f["materials/particle_size"][()]] \
                 if "materials/particle_size" in f else [""] * len(materials)
             depths = 1e3 * np.asarray(f["bite_depth"][()], dtype=float)
             passes = [int(v) for v in f["pass"][()]]
