@@ -139,6 +139,10 @@ struct SizeStudyOptions {
   int only_case = -1;            // >= 0: run this case alone (no analysis)
   double smooth_s = 0.05;        // the moving mean's window [s]
   bool plot = true;
+  // Earlier runs' DIR/size_study.csv files (`--prior`): their rows (peaks, beds, cost) join this
+  // run's in eq. 6-7, so a study too long for one sitting is run size by size. A size run here
+  // is taken from here; otherwise from the first file that has it.
+  std::vector<std::string> priors;
 };
 int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options);
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -32,7 +34,8 @@ std::string SizeList(const std::vector<double>& sizes_mm) {
 
 std::vector<double> StudySizesMm() { return {2, 2.5, 3.25, 4, 5.25, 6.5, 8.25, 10}; }
 
-std::vector<SizeCase> SizeCases(const Scene& base, const std::vector<double>& sizes_mm, int beds) {
+std::vector<SizeCase> SizeCases(const Scene& base, const std::vector<double>& sizes_mm, int beds,
+                                size_t min_sizes) {
   const std::string& file = base.path;
   const auto fail = [&](const std::string& key, const std::string& expected,
                         const std::string& got) {
@@ -49,8 +52,9 @@ std::vector<SizeCase> SizeCases(const Scene& base, const std::vector<double>& si
     fail("dig.passes", "1 (the study compares one pass)", std::to_string(base.dig.passes));
 
   const std::string sizes_expected =
-      "at least two different diameters in mm, each finite and > 0 (e.g. 10,8.25)";
-  if (sizes_mm.size() < 2) {
+      min_sizes >= 2 ? "at least two different diameters in mm, each finite and > 0 (e.g. 10,8.25)"
+                     : "different diameters in mm, each finite and > 0 (e.g. 10,8.25)";
+  if (sizes_mm.size() < std::max<size_t>(min_sizes, 1)) {
     throw InputError("study particle-size", 0, "--sizes", sizes_expected,
                      "'" + SizeList(sizes_mm) + "'");
   }
@@ -189,6 +193,18 @@ std::vector<SizeRow> SummarizeSizes(const std::vector<SizePeak>& peaks, double t
     r.cpu_s_mean /= r.beds;
     rows.push_back(r);
   }
+  return ScoreSizes(std::move(rows), tolerance_pct);
+}
+
+std::vector<SizeRow> ScoreSizes(std::vector<SizeRow> rows, double tolerance_pct) {
+  if (rows.empty()) throw std::invalid_argument("ScoreSizes: no rows");
+  std::sort(rows.begin(), rows.end(),
+            [](const SizeRow& a, const SizeRow& b) { return a.size_mm < b.size_mm; });
+  for (size_t k = 1; k < rows.size(); ++k) {
+    if (rows[k].size_mm == rows[k - 1].size_mm)
+      throw std::invalid_argument("ScoreSizes: the size " + Shortest(rows[k].size_mm) +
+                                  " mm twice");
+  }
   // Eq. 6 against the finest size's bed means.
   const double ref_force = rows.front().peak_force_mean;
   const double ref_torque = rows.front().peak_torque_mean;
@@ -207,6 +223,107 @@ std::vector<SizeRow> SummarizeSizes(const std::vector<SizePeak>& peaks, double t
     r.within_spread = k == 0 || (in(r.mpe_force_min_pct) && in(r.mpe_force_max_pct) &&
                                  in(r.mpe_torque_min_pct) && in(r.mpe_torque_max_pct));
   }
+  return rows;
+}
+
+std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& scene_path,
+                                  double smooth_s) {
+  std::ifstream in(path);
+  if (!in)
+    throw InputError(path, 0, "", "a size_study.csv of `scoopsim study particle-size`",
+                     "no such file (or it cannot be read)");
+  const std::string scene_name = std::filesystem::path(scene_path).filename().string();
+  const std::string first_key = "# scoopsim study particle-size ";
+  const std::string smooth_key = "# smoothing: centred moving mean over ";
+  std::vector<SizeRow> rows;
+  std::string text;
+  int line = 0;
+  bool header = false, smoothing = false;
+  const auto fail = [&](const std::string& key, const std::string& expected,
+                        const std::string& got) {
+    throw InputError(path, line, key, expected, got);
+  };
+  while (std::getline(in, text)) {
+    ++line;
+    if (line == 1) {
+      // "# scoopsim study particle-size SCENE (scoopsim VERSION): ..."
+      if (text.rfind(first_key, 0) != 0)
+        fail("", "a first line '" + first_key + "SCENE (...'", "'" + text.substr(0, 60) + "'");
+      const std::string rest = text.substr(first_key.size());
+      const std::string scene = rest.substr(0, rest.find(' '));
+      if (std::filesystem::path(scene).filename().string() != scene_name)
+        fail("scene", "the same scene as this study's (" + scene_name + ")", "'" + scene + "'");
+      continue;
+    }
+    if (text.rfind(smooth_key, 0) == 0) {
+      const double w = std::strtod(text.c_str() + smooth_key.size(), nullptr);
+      if (std::abs(w - smooth_s) > 1e-12 * std::max(1.0, smooth_s))
+        fail("smoothing", "the same window as this study's --smooth-s " + Shortest(smooth_s) + " s",
+             Shortest(w) + " s");
+      smoothing = true;
+      continue;
+    }
+    if (text.empty() || text[0] == '#') continue;
+    if (!header) {
+      if (text != SizeCsvHeader()) fail("", "the header line '" + SizeCsvHeader() + "'", text);
+      header = true;
+      continue;
+    }
+    static const char* const kColumns[] = {"size_mm",
+                                           "beds",
+                                           "peak_force_mean",
+                                           "peak_force_min",
+                                           "peak_force_max",
+                                           "mpe_force_pct",
+                                           "mpe_force_min_pct",
+                                           "mpe_force_max_pct",
+                                           "peak_torque_mean",
+                                           "peak_torque_min",
+                                           "peak_torque_max",
+                                           "mpe_torque_pct",
+                                           "mpe_torque_min_pct",
+                                           "mpe_torque_max_pct",
+                                           "within_20",
+                                           "cpu_s_mean"};
+    std::vector<double> v;
+    std::stringstream fields(text);
+    std::string field;
+    while (std::getline(fields, field, ',')) {
+      const size_t k = v.size();
+      char* end = nullptr;
+      const double x = std::strtod(field.c_str(), &end);
+      if (k >= 16) fail("", "16 columns", std::to_string(k + 1) + " or more");
+      if (field.empty() || *end != '\0' || !std::isfinite(x))
+        fail(kColumns[k], "a finite number", "'" + field + "'");
+      v.push_back(x);
+    }
+    if (v.size() != 16) fail("", "16 columns", std::to_string(v.size()));
+    SizeRow r;
+    r.size_mm = v[0];
+    if (!(r.size_mm > 0)) fail("size_mm", "a diameter > 0 [mm]", Shortest(r.size_mm));
+    if (!(v[1] >= 1) || v[1] != std::floor(v[1]) || v[1] > 1000)
+      fail("beds", "a number of beds in 1..1000", Shortest(v[1]));
+    r.beds = static_cast<int>(v[1]);
+    r.peak_force_mean = v[2];
+    r.peak_force_min = v[3];
+    r.peak_force_max = v[4];
+    r.peak_torque_mean = v[8];
+    r.peak_torque_min = v[9];
+    r.peak_torque_max = v[10];
+    r.cpu_s_mean = v[15];
+    const auto ordered = [&](int col, double lo, double mean, double hi) {
+      const double slack = 1e-9 * std::abs(mean);
+      if (!(lo > 0) || !(lo <= mean + slack) || !(mean <= hi + slack))
+        fail(kColumns[col], "peaks with 0 < min <= mean <= max",
+             Shortest(lo) + ", " + Shortest(mean) + ", " + Shortest(hi));
+    };
+    ordered(2, r.peak_force_min, r.peak_force_mean, r.peak_force_max);
+    ordered(8, r.peak_torque_min, r.peak_torque_mean, r.peak_torque_max);
+    rows.push_back(r);
+  }
+  if (line == 0) fail("", "a size_study.csv of `scoopsim study particle-size`", "an empty file");
+  if (!smoothing) fail("smoothing", "a line '" + smooth_key + "W s...'", "none");
+  if (rows.empty()) fail("", "at least one row after the header line", "none");
   return rows;
 }
 

@@ -53,7 +53,9 @@ struct SizeCase {
 // one of spheres of one radius d0 (bed.radius a number, no clump), poured (no bed.file), with a
 // dig of one pass. Throws InputError naming the scene and key (or the option: --sizes, --beds)
 // and what was expected.
-std::vector<SizeCase> SizeCases(const Scene& base, const std::vector<double>& sizes_mm, int beds);
+// `min_sizes`: how many sizes --sizes must give (2; 1 when earlier runs' rows join the study).
+std::vector<SizeCase> SizeCases(const Scene& base, const std::vector<double>& sizes_mm, int beds,
+                                size_t min_sizes = 2);
 
 // The sweep file (sim/sweep.h) of these cases over the scene file `scene_path` (absolute, or
 // relative to the sweep file's folder): a `cases:` list setting bed.radius, bed.count, bed.seed
@@ -102,8 +104,24 @@ struct SizeRow {
 };
 
 // The rows, by ascending size; the reference is the smallest size. Throws std::invalid_argument
-// for no peaks or a reference peak that is not > 0.
+// for no peaks or a reference peak that is not > 0. = ScoreSizes(the peaks' per-size rows).
 std::vector<SizeRow> SummarizeSizes(const std::vector<SizePeak>& peaks, double tolerance_pct);
+
+// Eq. 6 and the tolerance on rows whose peaks (beds, mean, min, max) and cost are set: sorted by
+// ascending size, every MPE and within flag set against the smallest size's bed means. So rows of
+// earlier runs (ReadSizeRows) and this run's join the study as if their peaks were summarized
+// together: each row keeps its own beds' mean and spread. Throws std::invalid_argument for no
+// rows, a size twice, or a reference peak that is not > 0.
+std::vector<SizeRow> ScoreSizes(std::vector<SizeRow> rows, double tolerance_pct);
+
+// The rows of an earlier run's DIR/size_study.csv (`--prior FILE`), their peaks, beds and cost
+// (its MPEs are recomputed here, against whatever is finest now). The file must be one of the
+// same study: its first line names a scene with the same file name as `scene_path`, its
+// smoothing line the same window `smooth_s` [s]; its header line is SizeCsvHeader(); each row
+// has beds >= 1 and finite peaks with 0 < min <= mean <= max (1e-9 relative slack). Anything
+// else throws InputError naming the file, the line, the column and what was expected.
+std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& scene_path,
+                                  double smooth_s);
 
 // Eq. 7 (see above) over rows by ascending size: the largest size within the tolerance, by the
 // bed means (spread false) or by every bed (spread true). The reference always counts.

@@ -76,7 +76,30 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
     throw InputError("study particle-size", 0, "--smooth-s", "a window >= 0 [s]",
                      Number(options.smooth_s));
   }
-  const std::vector<SizeCase> cases = SizeCases(scene, sizes, options.beds);
+  const std::vector<SizeCase> cases =
+      SizeCases(scene, sizes, options.beds, options.priors.empty() ? 2 : 1);
+
+  // Earlier runs' rows (--prior), read before any case runs: a size run here is taken from here,
+  // otherwise from the first file that has it.
+  std::vector<SizeRow> prior_rows;
+  std::vector<std::string> prior_notes;
+  {
+    std::vector<double> taken = sizes;
+    for (const std::string& file : options.priors) {
+      std::string used;
+      for (const SizeRow& r : ReadSizeRows(file, scene_path, options.smooth_s)) {
+        if (std::find(taken.begin(), taken.end(), r.size_mm) != taken.end()) continue;
+        taken.push_back(r.size_mm);
+        prior_rows.push_back(r);
+        used += (used.empty() ? "" : ",") + Number(r.size_mm);
+      }
+      if (!used.empty()) prior_notes.push_back("sizes_mm=" + used + " from " + file);
+    }
+    if (taken.size() < 2) {
+      throw InputError("study particle-size", 0, "--sizes",
+                       "at least two different diameters, with those of --prior", Number(sizes[0]));
+    }
+  }
 
   // The cases as a sweep file in DIR, run by the sweep machinery.
   // Its path absolute and normal: a case's scene text names the sweep file, and a finished case
@@ -117,10 +140,15 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
     const CaseResult& r = results.back();
     peaks.push_back({c.size_mm, c.bed, r.curve.peak_force, r.curve.peak_torque, r.cpu_s});
   }
-  const std::vector<SizeRow> rows = SummarizeSizes(peaks, kTolerancePct);
+  std::vector<SizeRow> rows = SummarizeSizes(peaks, kTolerancePct);
+  rows.insert(rows.end(), prior_rows.begin(), prior_rows.end());
+  rows = ScoreSizes(std::move(rows), kTolerancePct);
   const double verdict = LargestWithin(rows, false);
   const double verdict_spread = LargestWithin(rows, true);
   const SizeRow& ref = rows.front();
+  const auto from_prior = [&](double d) {
+    return std::find(sizes.begin(), sizes.end(), d) == sizes.end();
+  };
 
   // DIR/size_study.csv
   const fs::path csv = fs::path(options.dir) / "size_study.csv";
@@ -145,8 +173,12 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
            "too\n"
         << "# verdict: largest_within_20pct_mm=" << Number(verdict) << "\n"
         << "# verdict_spread: largest_within_20pct_all_beds_mm=" << Number(verdict_spread) << "\n"
-        << "# cpu_s_mean: CPU seconds of a case (pour + dig, all threads), mean over its beds\n"
-        << SizeCsvHeader() << "\n";
+        << "# cpu_s_mean: CPU seconds of a case (pour + dig, all threads), mean over its beds\n";
+    for (const std::string& n : prior_notes) {
+      out << "# prior: " << n
+          << " (its rows: peaks, beds, cost; MPE recomputed here; no curves in size_curves.csv)\n";
+    }
+    out << SizeCsvHeader() << "\n";
     for (const SizeRow& r : rows) out << SizeCsvLine(r) << "\n";
     if (!out.flush()) throw InputError(csv.string() + ": cannot write there");
   }
@@ -185,17 +217,18 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
                          : r.within_spread ? "yes, every bed"
                                            : "yes (the mean; not every bed)";
     std::printf(
-        "| %g | %d | %.4g [%.4g, %.4g] | %+.1f [%+.1f, %+.1f] | %.4g [%.4g, %.4g] | "
+        "| %g%s | %d | %.4g [%.4g, %.4g] | %+.1f [%+.1f, %+.1f] | %.4g [%.4g, %.4g] | "
         "%+.1f [%+.1f, %+.1f] | %s | %.3g |\n",
-        r.size_mm, r.beds, r.peak_force_mean, r.peak_force_min, r.peak_force_max, r.mpe_force_pct,
-        r.mpe_force_min_pct, r.mpe_force_max_pct, r.peak_torque_mean, r.peak_torque_min,
-        r.peak_torque_max, r.mpe_torque_pct, r.mpe_torque_min_pct, r.mpe_torque_max_pct, within,
-        r.cpu_s_mean);
+        r.size_mm, from_prior(r.size_mm) ? " (prior)" : "", r.beds, r.peak_force_mean,
+        r.peak_force_min, r.peak_force_max, r.mpe_force_pct, r.mpe_force_min_pct,
+        r.mpe_force_max_pct, r.peak_torque_mean, r.peak_torque_min, r.peak_torque_max,
+        r.mpe_torque_pct, r.mpe_torque_min_pct, r.mpe_torque_max_pct, within, r.cpu_s_mean);
   }
   std::printf(
       "\nverdict (eq. 7): largest size within 20%%: %g mm (every bed within: %g mm); the "
       "study found 3.5 mm\n",
       verdict, verdict_spread);
+  for (const std::string& n : prior_notes) std::printf("prior: %s\n", n.c_str());
   std::printf("scoopsim: wrote %s, %s\n", csv.c_str(), curves.c_str());
   std::fflush(stdout);
 

@@ -8,7 +8,8 @@
 //   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
 //   scoopsim study balovnev SCENE [-o OUT.h5] [--phi-deg P] [--delta-deg D] [--buried]
 //                                            the dig against Balovnev's model (table + PNG)
-//   scoopsim study particle-size SCENE [-o DIR] [--sizes A,B] [--beds N] [--case I] [--list]
+//   scoopsim study particle-size SCENE [-o DIR] [--sizes A,B] [--beds N] [--prior CSV] [--case I]
+//   [--list]
 //                                            the particle-size study (eq. 5-7; CSV, table, PNGs)
 //   scoopsim sweep SWEEP.yaml -o DIR; scoopsim table build|query|export-csv (tools/sweep_cli.h)
 //   scoopsim arm info URDF [--gravity G]     the parsed arm and its gravity torques
@@ -338,6 +339,11 @@ int Main(int argc, char** argv) {
                    "DEM threads per case; 0 = all cores (default: the scene's `threads` when "
                    "plain, 1 per rank under mpirun)")
       ->check(CLI::Range(0, kMaxThreads));
+  size->add_option("--prior", size_options.priors,
+                   "An earlier run's DIR/size_study.csv (same scene, same --smooth-s): its sizes "
+                   "join this run's in eq. 6-7 without being run again (rows only: peaks, beds, "
+                   "cost); repeatable, a size run here or in an earlier file wins")
+      ->check(CLI::ExistingFile);
   size->add_flag("--list", size_options.list,
                  "Print the cases (index, name, settings, cost) and exit");
   size->add_flag("--no-plot", size_no_plot, "Do not draw DIR/size_*.png");

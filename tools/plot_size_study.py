@@ -5,7 +5,9 @@
 
 Reads DIR/size_study.csv (one row per size: peaks, MPE and spread, eq. 6-7; its '#' lines hold the
 smoothing rule, the reference and the verdict) and DIR/size_curves.csv (every case's |F| and |T|,
-raw and smoothed, against time since first contact and rho), and writes:
+raw and smoothed, against time since first contact and rho), and writes (the sizes a '# prior:'
+line names came from an earlier run's size_study.csv, rows without curves: they are in the MPE
+figure only, drawn open):
   DIR/size_force.png  Fig. 3 analogue: smoothed |F| (top) and |T| (bottom) against rho, one
                       colour per size: the mean over its beds (line) and their min-max (band),
                       the raw rows of its first bed (faint);
@@ -74,7 +76,13 @@ def main():
             raise ValueError("%s: expected a line '# verdict: largest_within_20pct_mm=D'"
                              % os.path.join(d, "size_study.csv"))
         verdict = float(verdict.group(1))
-        missing = [s for s in study["size_mm"] if not np.any(curves["size_mm"] == s)]
+        prior = set()
+        for n in notes:
+            m = re.match(r"prior: sizes_mm=([0-9.eE+,-]+)", n)
+            if m:
+                prior |= {float(x) for x in m.group(1).split(",")}
+        missing = [s for s in study["size_mm"]
+                   if not np.any(curves["size_mm"] == s) and s not in prior]
         if missing:
             raise ValueError("%s: no curve of the size %g mm" % (os.path.join(d, "size_curves.csv"),
                                                                missing[0]))
@@ -87,8 +95,9 @@ def main():
     from mpl_toolkits.mplot3d import Axes3D  # noqa: F401 (registers the 3-D projection)
 
     sizes = study["size_mm"]
+    curved = np.array([s not in prior for s in sizes])
     colours = plt.cm.viridis(np.linspace(0, 0.9, len(sizes)))
-    means = {s: bed_means(curves, s) for s in sizes}
+    means = {s: bed_means(curves, s) for s in sizes[curved]}
     smoothing = note(notes, "smoothing:")
     written = []
 
@@ -96,7 +105,7 @@ def main():
     fig, axes = plt.subplots(2, 1, figsize=(9, 8), sharex=True)
     for ax, c, what in ((axes[0], "force_smooth", "|F| on the scoop [N]"),
                         (axes[1], "torque_smooth", "|T| about the scoop CoM [N m]")):
-        for s, colour, beds in zip(sizes, colours, study["beds"]):
+        for s, colour, beds in zip(sizes[curved], colours[curved], study["beds"][curved]):
             m = means[s]
             mean, lo, hi = m[c]
             ax.plot(1e3 * m["rho"], mean, color=colour, lw=1.4,
@@ -122,12 +131,12 @@ def main():
     fig = plt.figure(figsize=(12, 5.5))
     for k, (c, what) in enumerate((("force_smooth", "|F| [N]"), ("torque_smooth", "|T| [N m]"))):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
-        for s, colour in zip(sizes, colours):
+        for s, colour in zip(sizes[curved], colours[curved]):
             m = means[s]
             ax.plot(1e3 * m["rho"], np.full(m["rho"].shape, s), m[c][0], color=colour, lw=1.3)
         ax.set_xlabel("rho [mm]")
         ax.set_ylabel("diameter [mm]")
-        ax.set_yticks(sizes)
+        ax.set_yticks(sizes[curved])
         ax.set_zlabel(what)
         ax.view_init(elev=25, azim=-60)
     fig.suptitle("Particle size: smoothed force and torque against rho and diameter (bed means)",
@@ -144,8 +153,12 @@ def main():
                           (axes[1], "torque", "MPE of peak |T| [%]")):
         mpe = study["mpe_%s_pct" % key]
         err = np.array([mpe - study["mpe_%s_min_pct" % key], study["mpe_%s_max_pct" % key] - mpe])
-        ax.errorbar(sizes, mpe, yerr=err, fmt="o", color="tab:purple", ecolor="0.4", capsize=4,
-                    label="bed mean; bars: min-max over beds")
+        for here, style, label in ((curved, "o", "bed mean; bars: min-max over beds"),
+                                   (~curved, "s", "an earlier run's row (--prior)")):
+            if np.any(here):
+                ax.errorbar(sizes[here], mpe[here], yerr=err[:, here], fmt=style,
+                            color="tab:purple", mfc="tab:purple" if style == "o" else "none",
+                            ecolor="0.4", capsize=4, label=label)
         ax.plot(sizes[chosen], mpe[chosen], "o", ms=14, mfc="none", mec="red", mew=2,
                 label="eq. 7: %g mm" % verdict)
         for y in (20, -20):

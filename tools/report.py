@@ -300,9 +300,13 @@ def size_section(rep):
             "(eq. 7).</p>")
     made = [re.match(r"scoopsim study particle-size (\S+)", n) for n in notes]
     made = [m.group(1) for m in made if m]
+    # `# prior: sizes_mm=<list> from <file> (...)`: rows an earlier run made (--prior).
+    priors = [m.group(1) for m in (re.match(r"prior: sizes_mm=\S+ from (\S+)", n) for n in notes)
+              if m]
     if made:
-        rep.recorded["size"] = ["build/scoopsim study particle-size %s -o %s"
-                                % (made[0], rep.path("size"))]
+        rep.recorded["size"] = ["build/scoopsim study particle-size %s -o %s%s"
+                                % (made[0], rep.path("size"),
+                                   "".join(" --prior " + p for p in priors))]
     # `# verdict: largest_within_20pct_mm=<d>` (bed means) and `# verdict_spread:
     # largest_within_20pct_all_beds_mm=<d>` (every bed), each against the study's 3.5 mm.
     verdicts = [n for n in notes if n.lower().startswith("verdict")]

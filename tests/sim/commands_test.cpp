@@ -425,4 +425,59 @@ TEST(SizeStudyTest, TwoSizesTwoBedsEndToEnd) {
   EXPECT_EQ(scoopsim_test::ReadText(dir / "size_study.csv"), csv);
 }
 
+// A study split in two runs (`--prior`): 5 and 6 mm in one run (one bed each), then 6 mm alone
+// with the first run's size_study.csv as --prior gives the same rows (its 5 mm row read back from
+// the CSV's 9 digits: every column but the measured CPU within 1e-6 relative) and a '# prior:' line
+// naming 5 mm; --sizes 6 alone without --prior is one line and exit 2.
+TEST(SizeStudyTest, SplitRunWithPriorGivesTheSameRows) {
+  const std::string scene = WriteSphereScene();
+  const fs::path whole = TempDir() / "size_whole", part = TempDir() / "size_part";
+  const std::string log = (TempDir() / "size_split.log").string();
+  const std::string options = " --beds 1 --threads 1 -q --no-plot > /dev/null";
+  ASSERT_EQ(
+      scoopsim_test::RunScoopsim(
+          "study particle-size " + scene + " -o " + whole.string() + " --sizes 5,6" + options, log),
+      0)
+      << scoopsim_test::ReadText(log);
+  const std::string prior = (whole / "size_study.csv").string();
+  ASSERT_EQ(scoopsim_test::RunScoopsim("study particle-size " + scene + " -o " + part.string() +
+                                           " --sizes 6 --prior " + prior + options,
+                                       log),
+            0)
+      << scoopsim_test::ReadText(log);
+  const auto rows_of = [](const std::string& csv) {
+    std::vector<std::vector<double>> rows;
+    std::stringstream lines(csv);
+    for (std::string line; std::getline(lines, line);) {
+      if (line.empty() || line[0] == '#' || line == sim::SizeCsvHeader()) continue;
+      std::vector<double> v;
+      std::stringstream fields(line);
+      for (std::string field; std::getline(fields, field, ',');) v.push_back(std::stod(field));
+      rows.push_back(v);
+    }
+    return rows;
+  };
+  const std::string part_csv = scoopsim_test::ReadText(part / "size_study.csv");
+  EXPECT_NE(part_csv.find("\n# prior: sizes_mm=5 from " + prior), std::string::npos) << part_csv;
+  const auto a = rows_of(scoopsim_test::ReadText(prior)), b = rows_of(part_csv);
+  ASSERT_EQ(a.size(), 2u);
+  ASSERT_EQ(b.size(), 2u);
+  for (size_t r = 0; r < 2; ++r) {
+    ASSERT_EQ(b[r].size(), 16u);
+    for (size_t k = 0; k < 15; ++k)  // not cpu_s_mean (15): measured, run by run
+      EXPECT_NEAR(b[r][k], a[r][k], 1e-6 * std::max(1.0, std::abs(a[r][k]))) << r << "," << k;
+  }
+  EXPECT_FALSE(fs::exists(part / "cases" / "d5_b1.h5"));  // 5 mm was not run again
+
+  const std::string bad = (TempDir() / "size_split_bad.log").string();
+  EXPECT_EQ(
+      scoopsim_test::RunScoopsim("study particle-size " + scene + " -o " +
+                                     (TempDir() / "size_one").string() + " --sizes 6" + options,
+                                 bad),
+      2);
+  const std::string text = scoopsim_test::ReadText(bad);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+  EXPECT_NE(text.find("--sizes"), std::string::npos) << text;
+}
+
 }  // namespace

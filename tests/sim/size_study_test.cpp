@@ -171,6 +171,99 @@ TEST(SizeStudyMpeTest, BedMeansAndSpread) {
   EXPECT_FALSE(rows[1].within_spread);
 }
 
+// Rows of an earlier run join this run's (`--prior`): the 4 mm row of BedMeansAndSpread given as a
+// row (beds 2, mean 11.5 [11, 12], torque 1.15 [1.0, 1.3]) beside the 2 mm peaks summarized here,
+// scored against 2 mm's means (10, 1.0): the same hand-computed MPEs as there (+15 [+10, +20],
+// torque +15 [0, +30]), whatever MPE the row carried in; rows come out by size. Tolerance 1e-12 %.
+TEST(SizeStudyMpeTest, RowsOfAnEarlierRunScoreAsIfSummarizedTogether) {
+  sim::SizeRow earlier;
+  earlier.size_mm = 4;
+  earlier.beds = 2;
+  earlier.peak_force_mean = 11.5;
+  earlier.peak_force_min = 11;
+  earlier.peak_force_max = 12;
+  earlier.peak_torque_mean = 1.15;
+  earlier.peak_torque_min = 1.0;
+  earlier.peak_torque_max = 1.3;
+  earlier.mpe_force_pct = 99;  // against that run's reference: recomputed
+  std::vector<sim::SizeRow> rows = {earlier};
+  for (const sim::SizeRow& r : sim::SummarizeSizes({{2, 1, 9, 0.9, 10}, {2, 2, 11, 1.1, 30}}, 20))
+    rows.push_back(r);
+  rows = sim::ScoreSizes(rows, 20);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].size_mm, 2);
+  EXPECT_NEAR(rows[0].mpe_force_min_pct, -10, 1e-12);
+  EXPECT_NEAR(rows[1].mpe_force_pct, 15, 1e-12);
+  EXPECT_NEAR(rows[1].mpe_force_min_pct, 10, 1e-12);
+  EXPECT_NEAR(rows[1].mpe_force_max_pct, 20, 1e-12);
+  EXPECT_NEAR(rows[1].mpe_torque_pct, 15, 1e-12);
+  EXPECT_NEAR(rows[1].mpe_torque_min_pct, 0, 1e-12);
+  EXPECT_NEAR(rows[1].mpe_torque_max_pct, 30, 1e-12);
+  EXPECT_TRUE(rows[1].within);
+  EXPECT_FALSE(rows[1].within_spread);
+  // A size twice (here and in the earlier run) is refused.
+  rows.push_back(earlier);
+  EXPECT_THROW(sim::ScoreSizes(rows, 20), std::invalid_argument);
+}
+
+// An earlier run's size_study.csv read back (`--prior`): peaks, beds and cost from its rows; a
+// file of another scene, another smoothing window, another header, a field that is not a number,
+// peaks out of order, or no rows: an InputError naming the file, the line and the column.
+TEST(SizeStudyMpeTest, EarlierRunsRowsAreReadAndBadFilesRefused) {
+  const std::string scene = kSourceDir + "/scenes/paper/size_S10.yaml";
+  const std::string head =
+      "# scoopsim study particle-size scenes/paper/size_S10.yaml (scoopsim 0.1.0): paper\n"
+      "# smoothing: centred moving mean over 0.05 s of time, S_i = ...\n"
+      "# verdict: largest_within_20pct_mm=5.25\n";
+  const std::string good_row =
+      "5.25,2,1.13535366,1.10681807,1.16388925,16.6,13.7,19.6,0.0819815487,0.0810767026,"
+      "0.0828863948,10.8,9.6,12.0,1,728.621";
+  const auto write = [&](const std::string& name, const std::string& text) {
+    const std::string path = (TempDir() / name).string();
+    std::ofstream(path) << text;
+    return path;
+  };
+  const std::vector<sim::SizeRow> rows = sim::ReadSizeRows(
+      write("prior_good.csv", head + sim::SizeCsvHeader() + "\n" + good_row + "\n"), scene, 0.05);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].size_mm, 5.25);
+  EXPECT_EQ(rows[0].beds, 2);
+  EXPECT_EQ(rows[0].peak_force_mean, 1.13535366);
+  EXPECT_EQ(rows[0].peak_force_max, 1.16388925);
+  EXPECT_EQ(rows[0].peak_torque_min, 0.0810767026);
+  EXPECT_EQ(rows[0].cpu_s_mean, 728.621);
+
+  struct Bad {
+    std::string name, text, key;
+    int line;
+    double smooth;
+  };
+  const std::string csv_head = head + sim::SizeCsvHeader() + "\n";
+  const std::vector<Bad> bad = {
+      {"other_scene", "# scoopsim study particle-size scenes/paper/size_S2.yaml (x)\n", "scene", 1,
+       0.05},
+      {"other_window", csv_head + good_row + "\n", "smoothing", 2, 0.1},
+      {"header", head + "size_mm,beds\n" + good_row + "\n", "", 4, 0.05},
+      {"word", csv_head + "5.25,2,x" + good_row.substr(good_row.find(',', 5)) + "\n",
+       "peak_force_mean", 5, 0.05},
+      {"order", csv_head + "5.25,2,1.2,1.1,1.16,0,0,0,0.08,0.081,0.083,0,0,0,1,7\n",
+       "peak_force_mean", 5, 0.05},
+      {"no_rows", csv_head, "", 4, 0.05},
+  };
+  for (const Bad& b : bad) {
+    SCOPED_TRACE(b.name);
+    const std::string path = write("prior_" + b.name + ".csv", b.text);
+    try {
+      sim::ReadSizeRows(path, scene, b.smooth);
+      ADD_FAILURE() << "accepted";
+    } catch (const sim::InputError& e) {
+      EXPECT_EQ(e.file(), path);
+      EXPECT_EQ(e.key(), b.key) << e.what();
+      EXPECT_EQ(e.line(), b.line) << e.what();
+    }
+  }
+}
+
 sim::SizeRow Row(double size, double mpe_force, double mpe_torque, bool spread_ok = true) {
   sim::SizeRow r;
   r.size_mm = size;

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """tools/plot_size_study.py on synthetic files of `scoopsim study particle-size`'s layout (three
-sizes, two beds each): writes the three PNGs; a folder without the files, a CSV with another
-header, rows that are not numbers or no verdict line: one line, exit 2."""
+sizes, two beds each): writes the three PNGs, also when a '# prior:' line names a size that has no
+curves (an earlier run's row); a folder without the files, a CSV with another header, rows that are
+not numbers, no verdict line, or a size with neither curves nor a prior line: one line, exit 2."""
 
 import os
 import subprocess
@@ -18,9 +19,11 @@ CURVES = "size_mm,bed,time,rho,force,torque,force_smooth,torque_smooth"
 PNGS = ("size_force.png", "size_stack.png", "size_mpe.png")
 
 
-def write_study(d, header=STUDY, verdict=True, rows=None):
+def write_study(d, header=STUDY, verdict=True, rows=None, prior=None):
     with open(os.path.join(d, "size_study.csv"), "w") as f:
         f.write("# scoopsim study particle-size x.yaml\n# smoothing: centred moving mean over 0.05 s\n")
+        if prior:
+            f.write("# prior: sizes_mm=%s from old/size_study.csv (its rows: ...)\n" % prior)
         if verdict:
             f.write("# verdict: largest_within_20pct_mm=4\n")
         f.write(header + "\n")
@@ -31,10 +34,10 @@ def write_study(d, header=STUDY, verdict=True, rows=None):
             f.write(row + "\n")
 
 
-def write_curves(d):
+def write_curves(d, sizes=((2, 10), (4, 11.5), (6, 14))):
     with open(os.path.join(d, "size_curves.csv"), "w") as f:
         f.write("# curves\n" + CURVES + "\n")
-        for size, peak in ((2, 10), (4, 11.5), (6, 14)):
+        for size, peak in sizes:
             for bed in (1, 2):
                 for k in range(300 + 7 * bed):
                     t = 1e-3 * k
@@ -55,6 +58,19 @@ def main():
         for png in PNGS:
             with open(os.path.join(d, png), "rb") as f:
                 assert f.read(8) == b"\x89PNG\r\n\x1a\n", png
+        # 6 mm from an earlier run: no curves, in the MPE figure only.
+        prior = os.path.join(d, "prior")
+        os.mkdir(prior)
+        write_study(prior, prior="6")
+        write_curves(prior, sizes=((2, 10), (4, 11.5)))
+        r = run([prior])
+        assert r.returncode == 0, r.stderr
+        for png in PNGS:
+            assert os.path.getsize(os.path.join(prior, png)) > 0, png
+        no_prior = os.path.join(d, "no_prior")
+        os.mkdir(no_prior)
+        write_study(no_prior)
+        write_curves(no_prior, sizes=((2, 10), (4, 11.5)))
         empty = os.path.join(d, "empty")
         os.mkdir(empty)
         other = os.path.join(d, "other")
@@ -72,8 +88,10 @@ def main():
         expect_refused(run, (([empty], "cannot read"),
                              ([other], "expected the header"),
                              ([words], "expected numbers"),
-                             ([no_verdict], "expected a line '# verdict")))
-    print("plot_size_study_test: 3 plots written, 4 bad inputs refused with exit 2")
+                             ([no_verdict], "expected a line '# verdict"),
+                             ([no_prior], "no curve of the size 6 mm")))
+    print("plot_size_study_test: 3 plots written twice (once with a prior row), 5 bad inputs "
+          "refused with exit 2")
     return 0
 
 

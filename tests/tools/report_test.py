@@ -84,6 +84,7 @@ def write_size(d):
         f.write("# scoopsim study particle-size scenes/paper/size_S2.yaml (scoopsim 0.1.0): paper "
                 "section 4, eq. 5-7\n# verdict: largest_within_20pct_mm=4\n"
                 "# verdict_spread: largest_within_20pct_all_beds_mm=2\n"
+                "# prior: sizes_mm=10 from old/size_study.csv (its rows: peaks, beds, cost)\n"
                 "size_mm,beds,peak_force_mean,peak_force_min,peak_force_max,mpe_force_pct,"
                 "mpe_force_min_pct,mpe_force_max_pct,peak_torque_mean,peak_torque_min,"
                 "peak_torque_max,mpe_torque_pct,mpe_torque_min_pct,mpe_torque_max_pct,within_20,"
@@ -198,7 +199,8 @@ def main():
         assert "largest_within_20pct_mm=4 &mdash; 4 mm, coarser than the study" in size, size
         assert "all_beds_mm=2 &mdash; 2 mm, finer than the study" in size, size
         assert "<pre>build/scoopsim study particle-size scenes/paper/size_S2.yaml -o " + \
-            os.path.join(root, "size") + "</pre>" in size, "the recorded command"
+            os.path.join(root, "size") + " --prior old/size_study.csv</pre>" in size, \
+            "the recorded command, with the earlier run's rows it took"
         assert "Made by (as its files record)" in size
         bal = page[page.index('id="balovnev"'):page.index('id="testbed"')]
         rows = re.findall(r"<tr>(.*?)</tr>", bal)
