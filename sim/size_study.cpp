@@ -239,6 +239,11 @@ std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& sc
   std::string text;
   int line = 0;
   bool header = false, smoothing = false;
+  std::vector<std::string> columns;  // SizeCsvHeader()'s names, for the messages
+  {
+    std::stringstream names(SizeCsvHeader());
+    for (std::string name; std::getline(names, name, ',');) columns.push_back(name);
+  }
   const auto fail = [&](const std::string& key, const std::string& expected,
                         const std::string& got) {
     throw InputError(path, line, key, expected, got);
@@ -269,22 +274,6 @@ std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& sc
       header = true;
       continue;
     }
-    static const char* const kColumns[] = {"size_mm",
-                                           "beds",
-                                           "peak_force_mean",
-                                           "peak_force_min",
-                                           "peak_force_max",
-                                           "mpe_force_pct",
-                                           "mpe_force_min_pct",
-                                           "mpe_force_max_pct",
-                                           "peak_torque_mean",
-                                           "peak_torque_min",
-                                           "peak_torque_max",
-                                           "mpe_torque_pct",
-                                           "mpe_torque_min_pct",
-                                           "mpe_torque_max_pct",
-                                           "within_20",
-                                           "cpu_s_mean"};
     std::vector<double> v;
     std::stringstream fields(text);
     std::string field;
@@ -292,12 +281,14 @@ std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& sc
       const size_t k = v.size();
       char* end = nullptr;
       const double x = std::strtod(field.c_str(), &end);
-      if (k >= 16) fail("", "16 columns", std::to_string(k + 1) + " or more");
+      if (k >= columns.size())
+        fail("", std::to_string(columns.size()) + " columns", std::to_string(k + 1) + " or more");
       if (field.empty() || *end != '\0' || !std::isfinite(x))
-        fail(kColumns[k], "a finite number", "'" + field + "'");
+        fail(columns[k], "a finite number", "'" + field + "'");
       v.push_back(x);
     }
-    if (v.size() != 16) fail("", "16 columns", std::to_string(v.size()));
+    if (v.size() != columns.size())
+      fail("", std::to_string(columns.size()) + " columns", std::to_string(v.size()));
     SizeRow r;
     r.size_mm = v[0];
     if (!(r.size_mm > 0)) fail("size_mm", "a diameter > 0 [mm]", Shortest(r.size_mm));
@@ -314,7 +305,7 @@ std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& sc
     const auto ordered = [&](int col, double lo, double mean, double hi) {
       const double slack = 1e-9 * std::abs(mean);
       if (!(lo > 0) || !(lo <= mean + slack) || !(mean <= hi + slack))
-        fail(kColumns[col], "peaks with 0 < min <= mean <= max",
+        fail(columns[col], "peaks with 0 < min <= mean <= max",
              Shortest(lo) + ", " + Shortest(mean) + ", " + Shortest(hi));
     };
     ordered(2, r.peak_force_min, r.peak_force_mean, r.peak_force_max);
