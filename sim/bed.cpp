@@ -91,13 +91,17 @@ SettleReport FillAndSettle(const Scene& scene, dem::System* system, const Settle
     total.mean_ke = r.mean_ke;
     total.settled = r.settled;
     total.status = r.status;
+    // Its settling has ended (at rest, or at max_time), not been stopped by the observer.
+    at.settled = r.status.ok() && (r.settled || r.sim_time >= max_time);
     return r.status.ok();
   };
-  if (resumed) {
+  if (resumed && !at.settled) {
     // The last layer settles on for what is left of its time.
     total.layers = at.layers;
     const double spent = system->time() - at.layer_t0;
     if (!settle(std::max(0.0, at.layer_fall - spent), bed.settle_max_time - spent)) return total;
+  } else if (resumed) {
+    total.layers = at.layers;  // kept between layers: the next one is poured now
   }
   while (remaining > 0) {
     if (observe && !observe(*system)) break;  // stopped between layers
@@ -132,7 +136,7 @@ SettleReport FillAndSettle(const Scene& scene, dem::System* system, const Settle
     }
     const double g = dem::Norm(scene.gravity);
     const double t_fall = g > 0 ? std::sqrt(2.0 * (z_hi - z_lo) / g) : 0.0;
-    at = {total.layers, bed.count - remaining, rng.state(), system->time(), t_fall, true};
+    at = {total.layers, bed.count - remaining, rng.state(), system->time(), t_fall, true, false};
     if (!settle(t_fall, bed.settle_max_time)) break;
   }
   return total;

@@ -29,17 +29,21 @@ using SettleObserver = std::function<bool(const dem::System&)>;
 // Where a pour stands, kept up to date by FillAndSettle (a bed saved mid-pour carries it, and a
 // pour resumed from that bed goes on from it).
 struct PourPoint {
-  int layers = 0;          // layers inserted so far
-  int64_t poured = 0;      // bodies (spheres or clumps) inserted so far
-  uint64_t rng = 0;        // dem::Rng state after the last insertion
-  double layer_t0 = 0;     // time the last layer began to settle [s]
-  double layer_fall = 0;   // its fall time, the least it settles [s]
-  bool started = false;    // a layer has been inserted
+  int layers = 0;         // layers inserted so far
+  int64_t poured = 0;     // bodies (spheres or clumps) inserted so far
+  uint64_t rng = 0;       // dem::Rng state after the last insertion
+  double layer_t0 = 0;    // time the last layer began to settle [s]
+  double layer_fall = 0;  // its fall time, the least it settles [s]
+  bool started = false;   // a layer has been inserted
+  bool settled = false;   // the last layer has settled (the next is yet to be inserted)
 };
 
 // Pours scene.bed into the (empty or partly filled) system and settles it. With `point`, it
 // keeps *point up to date; a started *point (a pour saved mid-way and loaded back) is resumed:
-// the last layer settles on from where it was, then the rest is poured.
+// the last layer settles on from where it was (unless it had settled), then the rest is poured.
+// Resumed from the whole state the system had when *point was taken (dem::System::SaveState),
+// between two of the settling checks, which is where the observer is called, the pour goes on
+// bit for bit as it would have without the stop.
 SettleReport FillAndSettle(const Scene& scene, dem::System* system, const SettleObserver& observe,
                            PourPoint* point = nullptr);
 

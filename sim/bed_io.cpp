@@ -136,6 +136,10 @@ h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& syste
     h5::WriteU64Attribute(root.get(), "pour_rng", pour->rng);
     h5::WriteDoubleAttribute(root.get(), "pour_layer_t0", pour->layer_t0);
     h5::WriteDoubleAttribute(root.get(), "pour_layer_fall", pour->layer_fall);
+    h5::WriteDoubleAttribute(root.get(), "pour_layer_settled", pour->settled ? 1.0 : 0.0);
+    const std::vector<char> state = system.SaveState();
+    h5::WriteArray(file.get(), "/pour_state", H5T_STD_U8LE, H5T_NATIVE_UCHAR, state.data(),
+                   state.size(), 1);
   }
 
   // Particles: the snapshot holds the arrays; /particles links to them and adds force, torque.
@@ -394,7 +398,8 @@ std::string BedSceneYaml(const std::string& path) {
   }
 }
 
-bool ReadPourPoint(const std::string& path, const std::string& scene_yaml, PourPoint* pour) {
+bool ReadPourPoint(const std::string& path, const std::string& scene_yaml, PourPoint* pour,
+                   std::vector<char>* state) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec) || BedSceneYaml(path) != scene_yaml) return false;
   try {
@@ -410,7 +415,17 @@ bool ReadPourPoint(const std::string& path, const std::string& scene_yaml, PourP
     pour->rng = rng;
     pour->layer_t0 = in.ReadDoubleAttribute("/", "pour_layer_t0");
     pour->layer_fall = in.ReadDoubleAttribute("/", "pour_layer_fall");
+    pour->settled = in.HasAttribute("/", "pour_layer_settled") &&
+                    in.ReadDoubleAttribute("/", "pour_layer_settled") != 0;
     pour->started = true;
+    if (state != nullptr) {
+      state->clear();
+      if (in.Exists("/pour_state")) {
+        const std::vector<uint8_t> b =
+            in.Read<uint8_t>("/pour_state", H5T_INTEGER, H5T_NATIVE_UINT8, -1, 1);
+        state->assign(b.begin(), b.end());
+      }
+    }
     return true;
   } catch (const std::exception&) {
     return false;

@@ -14,6 +14,7 @@
 //   /contacts/         a, b int64 (M), shear (M x 3) [m]: System::Contacts(); b < 0 is plane -1-b
 //   Optional: /particles/awake uint8 (N): 0 for a particle that sleeps (dem::SleepConfig; it
 //   is loaded at rest), else awake; SaveBed does not write it (a settled bed is all awake)
+//   Only in a bed saved mid-pour: /pour_state uint8, the whole state (see SaveBed)
 //   Only when the bed has clumps (dem/clump.h; a sphere bed's file has neither group):
 //   /clump_templates/  names (T strings), sphere_count int32 (T), spheres (S_total x 4): x y z r
 //                      of each template's spheres in its template frame [m], template after
@@ -29,6 +30,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "dem/system.h"
 #include "sim/bed.h"
@@ -38,14 +40,17 @@ namespace sim {
 // Writes `system` to `path` (parent folders created; written to a temporary file of this process
 // and renamed, so an interrupted save never leaves a partial bed, nor do two processes saving at
 // once). Throws sim::InputError if it cannot be created. With `pour`, the bed is an unfinished
-// pour: root attributes pour_layers, pour_poured, pour_rng, pour_layer_t0, pour_layer_fall
-// (sim::PourPoint) say where it stopped.
+// pour: root attributes pour_layers, pour_poured, pour_rng, pour_layer_t0, pour_layer_fall,
+// pour_layer_settled (sim::PourPoint) say where it stopped, and /pour_state (uint8) holds the
+// system's whole state (dem::System::SaveState), from which the pour goes on bit for bit.
 void SaveBed(const std::string& path, const dem::System& system, const std::string& scene_yaml,
              const PourPoint* pour = nullptr);
 
 // Whether `path` is a bed saved mid-pour of the scene text `scene_yaml`; if so *pour is where it
-// stopped. False for a missing or unreadable file, a finished bed or another scene's.
-bool ReadPourPoint(const std::string& path, const std::string& scene_yaml, PourPoint* pour);
+// stopped and, given `state`, *state its /pour_state (empty when the file has none). False for a
+// missing or unreadable file, a finished bed or another scene's.
+bool ReadPourPoint(const std::string& path, const std::string& scene_yaml, PourPoint* pour,
+                   std::vector<char>* state = nullptr);
 
 // Appends the saved particles to `system` (AddParticle in saved id order, so a bed loaded into an
 // empty System keeps its ids), restores their last-step force and torque and their contact

@@ -143,6 +143,7 @@ struct SizeStudyOptions {
   // run's in eq. 6-7, so a study too long for one sitting is run size by size. A size run here
   // is taken from here; otherwise from the first file that has it.
   std::vector<std::string> priors;
+  double checkpoint_every = 600;  // [s] of wall time; sim::SweepOptions::checkpoint_every
 };
 int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options);
 

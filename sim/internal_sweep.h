@@ -19,10 +19,10 @@ struct CaseOutcome {
   int first_pass = 1;    // the pass this attempt began with (> 1: resumed)
 };
 
-// Runs (or resumes, or skips) one case into `dir` with `threads` DEM threads. Never throws:
+// Runs (or resumes, or skips) one case into options.dir with `threads` DEM threads. Never throws:
 // errors become exit statuses and the case's status record says why.
-CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& dir, int threads,
-                    bool quiet);
+CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& options,
+                    int threads);
 
 // Whether the case is done already (status record "done" for this scene text and its file).
 bool CaseDone(const SweepCase& c, const std::string& dir);

@@ -118,6 +118,7 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
   sweep_options.threads = options.threads;
   sweep_options.quiet = options.quiet;
   sweep_options.only_case = options.only_case;
+  sweep_options.checkpoint_every = options.checkpoint_every;
   sweep_options.build_table = false;
   bool complete = false;
   sweep_options.on_complete = [&complete] { complete = true; };

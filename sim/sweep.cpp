@@ -21,6 +21,7 @@
 #include <sstream>
 
 #include "sim/bed_io.h"
+#include "sim/checkpoint.h"
 #include "sim/exit_status.h"
 #include "sim/h5_output.h"
 #include "sim/internal_h5.h"
@@ -501,6 +502,10 @@ CaseStatus ReadCaseStatus(const std::string& path) {
         s.wall_s = std::stod(value);
       else if (key == "bed_cpu_s")
         s.bed_cpu_s = std::stod(value);
+      else if (key == "pass_wall_s")
+        s.pass_wall_s = std::stod(value);
+      else if (key == "pass_cpu_s")
+        s.pass_cpu_s = std::stod(value);
       else if (key == "message")
         s.message = value;
     } catch (const std::exception&) {
@@ -531,6 +536,8 @@ void WriteCaseStatus(const std::string& path, const CaseStatus& s) {
         << "exit_status: " << s.exit_status << "\n"
         << "wall_s: " << s.wall_s << "\n"
         << "bed_cpu_s: " << s.bed_cpu_s << "\n"
+        << "pass_wall_s: " << s.pass_wall_s << "\n"
+        << "pass_cpu_s: " << s.pass_cpu_s << "\n"
         << "message: " << message << "\n";
     out.flush();
     if (!out) throw std::runtime_error("cannot write " + tmp);
@@ -555,6 +562,10 @@ struct CasePaths {
   fs::path h5, status, lock, parts;
   fs::path Bed(int pass) const { return parts / ("bed_" + std::to_string(pass) + ".h5"); }
   fs::path Pass(int pass) const { return parts / ("pass_" + std::to_string(pass) + ".h5"); }
+  fs::path Restart(int pass) const {
+    return parts / ("pass_" + std::to_string(pass) + ".restart.h5");
+  }
+  fs::path Pour() const { return parts / "pour.h5"; }
 };
 
 CasePaths PathsOf(const SweepCase& c, const std::string& dir) {
@@ -564,7 +575,8 @@ CasePaths PathsOf(const SweepCase& c, const std::string& dir) {
 }
 
 // Test hook: SCOOPSIM_SWEEP_KILL=<case>:<pass>:<seconds> SIGKILLs the process that many simulated
-// seconds into that pass of that case (the uncontrolled stop a resume must survive).
+// seconds into that pass of that case (the uncontrolled stop a resume must survive); pass 0 is
+// the pour, killed just after its first keep that many simulated seconds in.
 double KillAfter(const SweepCase& c, int pass) {
   const char* hook = std::getenv("SCOOPSIM_SWEEP_KILL");
   if (hook == nullptr) return 0;
@@ -702,14 +714,16 @@ bool CaseDone(const SweepCase& c, const std::string& dir) {
   }
 }
 
-CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& dir, int threads,
-                    bool quiet) {
+CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& options,
+                    int threads) {
   CaseOutcome outcome;
+  const bool quiet = options.quiet;
+  const double every = options.checkpoint_every;
   const auto wall0 = std::chrono::steady_clock::now();
   const auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   };
-  const CasePaths paths = PathsOf(c, dir);
+  const CasePaths paths = PathsOf(c, options.dir);
   CaseStatus status;
   const auto record = [&](const std::string& state, int exit_status, const std::string& message) {
     status.state = state;
@@ -746,13 +760,32 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
     if (done > 0 && !(fs::exists(paths.Bed(done)) || done == passes)) done = 0;
     for (int k = 1; k <= done; ++k)
       if (!fs::exists(paths.Pass(k))) done = 0;
+    // The next pass goes on from its checkpoint when one of this scene text is there (with the
+    // rows it kept); any other is of no use.
+    std::unique_ptr<Checkpoint> checkpoint;
+    const fs::path restart = paths.Restart(done + 1);
+    if (done < passes && fs::exists(restart) && fs::exists(paths.Pass(done + 1))) {
+      try {
+        auto read = std::make_unique<Checkpoint>(ReadCheckpoint(restart.string()));
+        if (read->scene_yaml == scene.yaml_text) checkpoint = std::move(read);
+      } catch (const InputError& e) {
+        Status("scoopsim: sweep: case %s: %s; pass %d starts again\n", c.name.c_str(), e.what(),
+               done + 1);
+      }
+    }
     if (done == 0) {
-      // A fresh start; a settled bed made from this very scene text is kept (saving is atomic).
+      // A fresh start. Kept: a settled bed made from this very scene text (saving is atomic), the
+      // pour kept so far (World::Pour checks its scene text) and pass 1's checkpoint and rows.
       const bool keep_bed =
           fs::exists(paths.Bed(0)) && BedSceneYaml(paths.Bed(0).string()) == scene.yaml_text;
+      const auto kept = [&](const fs::path& path) {
+        if (keep_bed && path == paths.Bed(0)) return true;
+        if (!keep_bed && path == paths.Pour()) return true;
+        return checkpoint != nullptr && (path == paths.Pass(1) || path == paths.Restart(1));
+      };
       if (fs::exists(paths.parts)) {
         for (const auto& entry : fs::directory_iterator(paths.parts))
-          if (!(keep_bed && entry.path() == paths.Bed(0))) fs::remove_all(entry.path());
+          if (!kept(entry.path())) fs::remove_all(entry.path());
       }
       fs::remove(paths.h5);
     }
@@ -768,9 +801,22 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
     if (first_bed.empty()) {
       first_bed = paths.Bed(0).string();
       if (done == 0 && !fs::exists(first_bed)) {
+        // A pour kept by an earlier attempt goes on; its CPU time up to that keep counts.
+        PourPoint kept;
+        const bool goes_on = ReadPourPoint(paths.Pour().string(), scene.yaml_text, &kept);
+        const double cpu_before = goes_on ? status.bed_cpu_s : 0.0;
+        status.bed_cpu_s = cpu_before;
         record("running", 0, "making the bed");
         const double cpu0 = CpuSeconds();
         World world(scene, threads);
+        if (every > 0) {
+          const double kill_after = KillAfter(c, 0);
+          world.KeepPour(paths.Pour().string(), every, [&] {
+            status.bed_cpu_s = cpu_before + (CpuSeconds() - cpu0);
+            record("running", 0, "making the bed");
+            if (kill_after > 0 && world.system().time() >= kill_after) std::raise(SIGKILL);
+          });
+        }
         SettleReport report;
         const int settled = world.Pour(quiet, &report);
         if (settled != kExitOk) {
@@ -780,22 +826,42 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
           return outcome;
         }
         SaveBed(first_bed, world.system(), scene.yaml_text);
-        status.bed_cpu_s = CpuSeconds() - cpu0;
+        status.bed_cpu_s = cpu_before + (CpuSeconds() - cpu0);
       }
     }
 
-    // The passes, each in a World of its own from the bed the previous one left.
+    // The passes, each in a World of its own from the bed the previous one left (or from its
+    // checkpoint).
     for (int pass = done + 1; pass <= passes; ++pass) {
+      const bool resumed = pass == done + 1 && checkpoint != nullptr;
+      if (!resumed) status.pass_wall_s = status.pass_cpu_s = 0;
+      const double wall_before = status.pass_wall_s, cpu_before = status.pass_cpu_s;
       record("running", 0, "pass " + std::to_string(pass));
       const double cpu0 = CpuSeconds();
       const auto pass0 = std::chrono::steady_clock::now();
+      const auto pass_wall = [&] {
+        return wall_before +
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - pass0).count();
+      };
       World world(scene, threads);
-      world.LoadBed(pass == 1 ? first_bed : paths.Bed(pass - 1).string());
-      H5Output out(paths.Pass(pass).string(), scene.yaml_text, SCOOPSIM_VERSION,
-                   scene.output.flush_seconds);
-      world.UseOutput(&out);
-      const DigResume resume{pass, status.surface, status.clear_z};
-      world.StartDig(KinematicDriver::ForDig(scene.dig), pass > 1 ? &resume : nullptr);
+      std::unique_ptr<H5Output> out;
+      if (resumed) {
+        const OutputCursor cursor = DecodeCursor(checkpoint->output_state, restart.string());
+        out = std::make_unique<H5Output>(paths.Pass(pass).string(), scene.yaml_text,
+                                         SCOOPSIM_VERSION, scene.output.flush_seconds, &cursor);
+        world.UseOutput(out.get());
+        world.ResumeFrom(*checkpoint, KinematicDriver::ForDig(scene.dig), restart.string());
+        checkpoint.reset();
+        Status("scoopsim: sweep: case %s goes on from %s at t = %.6g s\n", c.name.c_str(),
+               restart.c_str(), world.system().time());
+      } else {
+        world.LoadBed(pass == 1 ? first_bed : paths.Bed(pass - 1).string());
+        out = std::make_unique<H5Output>(paths.Pass(pass).string(), scene.yaml_text,
+                                         SCOOPSIM_VERSION, scene.output.flush_seconds);
+        world.UseOutput(out.get());
+        const DigResume resume{pass, status.surface, status.clear_z};
+        world.StartDig(KinematicDriver::ForDig(scene.dig), pass > 1 ? &resume : nullptr);
+      }
       RunControl control;
       control.quiet = quiet;
       control.stop_after = KillAfter(c, pass);
@@ -803,10 +869,19 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
         if (ended < passes) SaveBed(paths.Bed(ended).string(), world.system(), scene.yaml_text);
         return false;  // one pass per World
       };
+      if (every > 0) {
+        control.checkpoint_every = every;
+        control.checkpoint_path = paths.Restart(pass).string();
+        control.on_checkpoint = [&] {
+          status.pass_wall_s = pass_wall();
+          status.pass_cpu_s = cpu_before + (CpuSeconds() - cpu0);
+          record("running", 0, "pass " + std::to_string(pass));
+        };
+      }
       const RunResult result = world.Run(control);
       if (result.stopped_after) std::raise(SIGKILL);  // the test hook
       if (result.exit_status != kExitOk || result.stopped_at_pass != pass) {
-        out.Close();
+        out->Close();
         const int exit_status = result.exit_status != kExitOk ? result.exit_status : kExitFailure;
         record(exit_status == kExitStopped ? "stopped" : "failed", exit_status,
                "pass " + std::to_string(pass) + " did not finish");
@@ -819,17 +894,16 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const std::string& d
         status.surface = point.surface;
         status.clear_z = point.clear_z;
       }
-      out.SetStateHash(world.system().StateHash());
-      out.SetAttribute("time", world.system().time());
-      out.SetAttribute(
-          "wall_s",
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - pass0).count());
-      out.SetAttribute("cpu_s", CpuSeconds() - cpu0);
-      out.Close();
+      out->SetStateHash(world.system().StateHash());
+      out->SetAttribute("time", world.system().time());
+      out->SetAttribute("wall_s", pass_wall());
+      out->SetAttribute("cpu_s", cpu_before + (CpuSeconds() - cpu0));
+      out->Close();
       status.passes_done = pass;
-      status.wall_s +=
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - pass0).count();
+      status.wall_s += pass_wall();
+      status.pass_wall_s = status.pass_cpu_s = 0;
       record("running", 0, "");
+      fs::remove(paths.Restart(pass));
       // The bed before this pass is no longer needed (the scene's own bed is not ours to remove).
       if (pass > 1 || scene.bed.file.empty()) {
         const fs::path used = pass == 1 ? fs::path(first_bed) : paths.Bed(pass - 1);
@@ -943,8 +1017,7 @@ int RunSweep(const Sweep& sweep, const SweepOptions& options) {
     }
     const int threads = options.threads >= 0 ? options.threads : c.scene.threads;
     log.Started(c, 0, threads);
-    const sweep::CaseOutcome outcome =
-        sweep::RunCase(sweep, c, options.dir, threads, options.quiet);
+    const sweep::CaseOutcome outcome = sweep::RunCase(sweep, c, options, threads);
     if (outcome.skipped) {
       log.Skipped(c);
     } else {

@@ -1,8 +1,8 @@
 // Sweeps: one base scene run many times with some of its keys varied, each case an independent
 // run, farmed out plainly (one after another), over Open MPI (`mpirun -np N`: cases handed out
 // dynamically, longest first) or by a batch scheduler's job array (`--case I`), and resumed
-// after a stop: finished cases are skipped and a stopped multi-pass case restarts from its last
-// finished pass.
+// after a stop: finished cases are skipped and a stopped case goes on from its last checkpoint
+// (its pour so far, or its running pass), else from its last finished pass.
 //
 // The sweep file (YAML; paths relative to it):
 //   scene: ../tiny_dig.yaml              the base scene (required)
@@ -35,11 +35,17 @@
 //                              stopped), passes, passes_done, surface, clear_z, scene_hash, ...
 //   DIR/cases/<name>.parts/    while it runs: bed_<k>.h5, the bed after pass k (bed_0.h5 the
 //                              settled bed when the scene makes its own) and pass_<k>.h5, the rows
-//                              of pass k; removed when the case is done
+//                              of pass k; removed when the case is done;
+//                              also, every --checkpoint-every seconds of wall time
+//                              (SweepOptions::checkpoint_every) and when stopped by a signal,
+//                              pour.h5 (the pour so far: a saved bed with the whole state,
+//                              sim/bed_io.h) and pass_<k>.restart.h5 (the running pass's
+//                              checkpoint, sim/checkpoint.h), from which a resumed case goes on
+//                              bit for bit
 //   DIR/cases/<name>.lock      flock'ed while a process runs the case (two never run one case)
 //   DIR/table.h5               the wrench table (sim/wrench_table.h), built when every case is done
 // Test hook: SCOOPSIM_SWEEP_KILL=<case>:<pass>:<seconds> SIGKILLs the process that many simulated
-// seconds into that pass of that case.
+// seconds into that pass of that case (pass 0: the pour, just after a keep).
 //
 // Each pass runs in a fresh World from the bed the previous pass left (saved, then loaded), in
 // an uninterrupted run as in a resumed one, so a resumed case's rows equal the uninterrupted
@@ -90,6 +96,9 @@ struct SweepOptions {
   bool quiet = false;       // no progress line of each run (the per-case lines stay)
   int only_case = -1;       // >= 0: run this case alone (no MPI, no table)
   bool build_table = true;  // DIR/table.h5 once every case is done
+  // Wall-time period [s] of a case's pour keeps and pass checkpoints (0: none; a stopped case
+  // then goes on from its last finished pass, its pour made again).
+  double checkpoint_every = 600;
   // Called once every case is done, where the table is built (the plain runner, or rank 0 under
   // MPI before MPI_Finalize; not with only_case), after the table. A study on a sweep's cases
   // (`study particle-size`) sets a flag here and reads the cases once RunSweep has returned.
@@ -115,6 +124,9 @@ struct CaseStatus {
   int exit_status = 0;     // of the last attempt
   double wall_s = 0;       // wall time of the case so far, all attempts [s]
   double bed_cpu_s = 0;    // CPU time of pouring its bed, all threads [s] (0: a saved bed)
+                           // (while it pours: up to its last keep)
+  double pass_wall_s = 0;  // the running pass's wall time up to its last checkpoint [s]
+  double pass_cpu_s = 0;   // and its CPU time [s]
   std::string message;     // what went wrong, if anything
 };
 // Reads a record; state "" when there is none. Throws InputError for a malformed one.

@@ -49,8 +49,7 @@ int Worker(const Sweep& sweep, const SweepOptions& options, int rank, int thread
     int index = -1;
     MPI_Recv(&index, 1, MPI_INT, 0, kTagAssign, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
     if (index < 0) break;
-    const CaseOutcome outcome =
-        RunCase(sweep, sweep.cases[index], options.dir, threads, options.quiet);
+    const CaseOutcome outcome = RunCase(sweep, sweep.cases[index], options, threads);
     report[0] = index;
     report[1] = outcome.exit_status;
     report[2] = outcome.wall;
@@ -99,8 +98,7 @@ int Dispatcher(const Sweep& sweep, const SweepOptions& options, int ranks, int t
         index = local_case;
         if (index < 0) return;
       }
-      const CaseOutcome outcome =
-          RunCase(sweep, sweep.cases[index], options.dir, threads, options.quiet);
+      const CaseOutcome outcome = RunCase(sweep, sweep.cases[index], options, threads);
       std::lock_guard<std::mutex> lock(mutex);
       local_outcome = outcome;
       local_done_index = index;

@@ -17,21 +17,21 @@ namespace sim {
 // The dig's state: the scoop, its driver and the current pass.
 struct World::Dig {
   std::unique_ptr<ScoopDriver> driver;
-  int mesh = -1;         // index in the DEM system
-  dem::Vec3 com_scoop;   // scoop centre of mass in l_scoop [m]
-  BodyFrame body;        // the study's body frame
-  dem::Vec3 trench;      // unit digging direction, world
-  BedContext bed;        // surface, clearance, mesh, step
-  int pass = 0;          // 1-based; passes + 1 once done
-  double pass_t0 = 0;    // time the current pass began [s]
-  double next_row = 0;   // time of the next /scoop/ row [s]
-  bool touched = false;  // the scoop has touched a particle in this pass
-  dem::Vec3 com_contact; // CoM at first touch [m]
-  double rho = 0;        // CoM travel along the trench since first touch [m]
-  ScoopWrench wrench;    // of the last step
-  double force_sum = 0;  // |F| over the rows after first contact, for the mean [N]
+  int mesh = -1;          // index in the DEM system
+  dem::Vec3 com_scoop;    // scoop centre of mass in l_scoop [m]
+  BodyFrame body;         // the study's body frame
+  dem::Vec3 trench;       // unit digging direction, world
+  BedContext bed;         // surface, clearance, mesh, step
+  int pass = 0;           // 1-based; passes + 1 once done
+  double pass_t0 = 0;     // time the current pass began [s]
+  double next_row = 0;    // time of the next /scoop/ row [s]
+  bool touched = false;   // the scoop has touched a particle in this pass
+  dem::Vec3 com_contact;  // CoM at first touch [m]
+  double rho = 0;         // CoM travel along the trench since first touch [m]
+  ScoopWrench wrench;     // of the last step
+  double force_sum = 0;   // |F| over the rows after first contact, for the mean [N]
   int64_t force_rows = 0;
-  double planned = 0;    // all passes [s]
+  double planned = 0;  // all passes [s]
 };
 
 namespace {
@@ -67,15 +67,30 @@ void World::LoadState(const std::string& path) {
   sleep_applied_ = true;
 }
 
-void World::KeepPour(const std::string& path) { pour_file_ = path; }
+void World::KeepPour(const std::string& path, double every, std::function<void()> on_keep) {
+  pour_file_ = path;
+  pour_every_ = every > 0 ? every : scene_.output.flush_seconds;
+  on_keep_ = std::move(on_keep);
+}
 
 int World::Pour(bool quiet, SettleReport* report) {
   namespace fs = std::filesystem;
-  // A pour this scene left unfinished in the keep file goes on from there.
+  // A pour this scene left unfinished in the keep file goes on from there: from its whole state
+  // (bit for bit), or, kept by an older scoopsim, from its bed (the same bed in law, not in bits).
   PourPoint point;
-  if (!pour_file_.empty() && ReadPourPoint(pour_file_, scene_.yaml_text, &point)) {
-    sim::LoadBed(pour_file_, system_.get());
-    system_->Canonicalize();
+  std::vector<char> state;
+  if (!pour_file_.empty() && ReadPourPoint(pour_file_, scene_.yaml_text, &point, &state)) {
+    if (!state.empty()) {
+      try {
+        system_->RestoreState(state);
+      } catch (const std::runtime_error& e) {
+        throw InputError(pour_file_ + ": /pour_state does not fit this scene's system (" +
+                         e.what() + "); remove the file to pour anew");
+      }
+    } else {
+      sim::LoadBed(pour_file_, system_.get());
+      system_->Canonicalize();
+    }
     Status("scoopsim: the pour goes on from %s: %lld of %lld bodies poured (layer %d)\n",
            pour_file_.c_str(), static_cast<long long>(point.poured),
            static_cast<long long>(scene_.bed.count), point.layers);
@@ -88,9 +103,14 @@ int World::Pour(bool quiet, SettleReport* report) {
   };
   // The bed so far goes to the keep file every output.flush_seconds and when stopped.
   auto last_keep = std::chrono::steady_clock::now();
+  double keep_every = pour_every_;
   auto keep = [&] {
+    const auto keep0 = std::chrono::steady_clock::now();
     SaveBed(pour_file_, *system_, scene_.yaml_text, &point);
     last_keep = std::chrono::steady_clock::now();
+    // A big bed's keep takes seconds: keeping costs at most a tenth of the run.
+    keep_every = std::max(pour_every_, 10 * Seconds(last_keep - keep0));
+    if (on_keep_) on_keep_();
   };
   SettleReport& r = *report;
   r = FillAndSettle(
@@ -98,35 +118,40 @@ int World::Pour(bool quiet, SettleReport* report) {
       [&](const dem::System& s) {
         progress.Update(s.time() - t0, particle_steps());
         if (!pour_file_.empty() && point.started && !StopRequested() &&
-            Seconds(std::chrono::steady_clock::now() - last_keep) >= scene_.output.flush_seconds)
+            Seconds(std::chrono::steady_clock::now() - last_keep) >= keep_every)
           keep();
         return !StopRequested();
       },
       &point);
   progress.Finish(system_->time() - t0, particle_steps());
-  if (!pour_file_.empty() && StopRequested() && point.started && r.status.ok()) {
+  // (A pour that has ended is not kept: the bed is whole, and is made ready and returned.)
+  const bool ended = point.settled && point.poured >= scene_.bed.count;
+  if (!pour_file_.empty() && StopRequested() && point.started && !ended && r.status.ok()) {
     keep();
-    Status("scoopsim: the bed poured so far (%lld of %lld bodies) is in %s; the same command goes "
-           "on from it\n",
-           static_cast<long long>(point.poured), static_cast<long long>(scene_.bed.count),
-           pour_file_.c_str());
+    Status(
+        "scoopsim: the bed poured so far (%lld of %lld bodies) is in %s; the same command goes "
+        "on from it\n",
+        static_cast<long long>(point.poured), static_cast<long long>(scene_.bed.count),
+        pour_file_.c_str());
   }
   int status = kExitOk;
   if (!r.status.ok()) {
     Status("scoopsim: simulation unstable: %s\n", r.status.message.c_str());
     return kExitUnstable;
   }
-  if (StopRequested()) return kExitStopped;
+  if (StopRequested() && !ended) return kExitStopped;
   if (system_->num_bodies() < scene_.bed.count) {
-    Status("scoopsim: %s: the box holds only %lld of bed.count = %lld particles; raise box.max or "
-           "lower bed.count\n",
-           scene_.path.c_str(), static_cast<long long>(system_->num_bodies()),
-           static_cast<long long>(scene_.bed.count));
+    Status(
+        "scoopsim: %s: the box holds only %lld of bed.count = %lld particles; raise box.max or "
+        "lower bed.count\n",
+        scene_.path.c_str(), static_cast<long long>(system_->num_bodies()),
+        static_cast<long long>(scene_.bed.count));
     status = kExitNotSettled;
   } else if (!r.settled) {
-    Status("scoopsim: bed not settled after %.3g s (mean kinetic energy %.3g J > %.3g J); raise "
-           "bed.settle.max_time or bed.settle.kinetic_energy\n",
-           r.sim_time, r.mean_ke, scene_.bed.settle_ke);
+    Status(
+        "scoopsim: bed not settled after %.3g s (mean kinetic energy %.3g J > %.3g J); raise "
+        "bed.settle.max_time or bed.settle.kinetic_energy\n",
+        r.sim_time, r.mean_ke, scene_.bed.settle_ke);
     status = kExitNotSettled;
   }
   // Storage and lists a function of positions and ids alone, ready to save or run.
@@ -277,9 +302,7 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver, const DigResume* resum
   if (!Done()) BeginPass();
 }
 
-DigResume World::ResumePoint() const {
-  return {dig_->pass, dig_->bed.surface, dig_->bed.clear_z};
-}
+DigResume World::ResumePoint() const { return {dig_->pass, dig_->bed.surface, dig_->bed.clear_z}; }
 
 void World::BeginPass() {
   Dig& dig = *dig_;
@@ -538,10 +561,14 @@ RunResult World::Run(const RunControl& control) {
   RunResult result;
   control_ = &control;
   auto last_checkpoint = std::chrono::steady_clock::now();
+  auto checkpoint = [&] {
+    WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+    if (control.on_checkpoint) control.on_checkpoint();
+  };
   if (control.checkpoint_every > 0) {
     // One at the start: a run killed before its first period (after a long pour, say) resumes.
     try {
-      WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+      checkpoint();
     } catch (const std::exception& e) {
       Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
       result.exit_status = kExitFailure;
@@ -585,7 +612,7 @@ RunResult World::Run(const RunControl& control) {
       if (control.checkpoint_every > 0 &&
           Seconds(std::chrono::steady_clock::now() - last_checkpoint) >= control.checkpoint_every) {
         try {
-          WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+          checkpoint();
         } catch (const std::exception& e) {
           Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
           result.exit_status = kExitFailure;
@@ -596,7 +623,7 @@ RunResult World::Run(const RunControl& control) {
       if (StopRequested()) {
         if (control.checkpoint_every > 0) {  // go on from here, not from the last checkpoint
           try {
-            WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+            checkpoint();
           } catch (const std::exception& e) {
             Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
           }
@@ -620,13 +647,14 @@ RunResult World::Run(const RunControl& control) {
     summary_.mean_force = dig_->force_rows > 0 ? dig_->force_sum / dig_->force_rows : 0.0;
     summary_.steps = system.step_count() - step0_;
     summary_.simulated = system.time() - t_start_;
-    Status("scoopsim: dig: %lld particles, %lld steps, %.4g s simulated; peak |F| %.4g N, mean "
-           "|F| %.4g N (after first contact), peak |T| %.4g N m; %lld neighbour builds, %.3g "
-           "awake particle-steps per step\n",
-           static_cast<long long>(summary_.particles), static_cast<long long>(summary_.steps),
-           summary_.simulated, summary_.peak_force, summary_.mean_force, summary_.peak_torque,
-           static_cast<long long>(system.neighbor_stats().builds),
-           static_cast<double>(particle_steps_) / std::max<int64_t>(1, summary_.steps));
+    Status(
+        "scoopsim: dig: %lld particles, %lld steps, %.4g s simulated; peak |F| %.4g N, mean "
+        "|F| %.4g N (after first contact), peak |T| %.4g N m; %lld neighbour builds, %.3g "
+        "awake particle-steps per step\n",
+        static_cast<long long>(summary_.particles), static_cast<long long>(summary_.steps),
+        summary_.simulated, summary_.peak_force, summary_.mean_force, summary_.peak_torque,
+        static_cast<long long>(system.neighbor_stats().builds),
+        static_cast<double>(particle_steps_) / std::max<int64_t>(1, summary_.steps));
     Status("scoopsim: dig: %.1f s wall (%.3g x real time): %s\n", result.wall,
            summary_.simulated / std::max(result.wall, 1e-9),
            PhaseBreakdown(PhasesSince(system.phase_times(), phases0), result.wall).c_str());

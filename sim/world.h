@@ -48,19 +48,21 @@ constexpr uint32_t kOutputFailed = 1u << 16;
 
 // How Run() is watched and stopped.
 struct RunControl {
-  bool quiet = false;        // no progress line
-  double stop_after = 0;     // stop after this much simulated time [s] (0: run to the end)
-  FrameCallback on_frame;    // frames at the start and then every frame_every seconds
-  double frame_every = 0;    // [s]; 0 = output.interval (plain run), 0.05 s (dig)
+  bool quiet = false;      // no progress line
+  double stop_after = 0;   // stop after this much simulated time [s] (0: run to the end)
+  FrameCallback on_frame;  // frames at the start and then every frame_every seconds
+  double frame_every = 0;  // [s]; 0 = output.interval (plain run), 0.05 s (dig)
   // Called by the loop thread when dig pass `pass` has ended and its sample has been taken out,
   // before the next pass begins (a sweep saves the bed there, to resume from). Return false to
   // stop the run at that point (RunResult::stopped_at_pass). It may throw: the run then stops as
   // for an output failure (exit status 1, the message printed).
   std::function<bool(int pass)> on_pass_end;
   // At the start and every checkpoint_every seconds of wall time (0: never), between steps, the
-  // output is flushed and the run's whole state written to checkpoint_path (sim/checkpoint.h).
+  // output is flushed and the run's whole state written to checkpoint_path (sim/checkpoint.h);
+  // on_checkpoint (optional) is called after each one is written.
   double checkpoint_every = 0;  // [s]
   std::string checkpoint_path;
+  std::function<void()> on_checkpoint;
 };
 
 // Where a dig starts when it does not start at its first pass: a dig resumed from the bed that
@@ -95,10 +97,12 @@ class World {
   // flags, then the storage made canonical, so a plain run continues it with no further rebuild.
   void LoadState(const std::string& path);
   int Pour(bool quiet, SettleReport* report);
-  // Pour() keeps the bed poured so far in `path` (a saved bed with its sim::PourPoint) every
-  // output.flush_seconds of wall time and when stopped by a signal, goes on from it when it holds
-  // an unfinished pour of this scene, and removes it once the pour has ended.
-  void KeepPour(const std::string& path);
+  // Pour() keeps the bed poured so far in `path` (a saved bed with its sim::PourPoint and the
+  // whole state) every `every` seconds of wall time (0: output.flush_seconds), but never more
+  // often than ten times the last keep's own wall time, and when stopped by a signal; goes on
+  // from it, bit for bit, when it holds an unfinished pour of this scene; and removes it once the
+  // pour has ended. `on_keep` is called after each keep is written.
+  void KeepPour(const std::string& path, double every = 0, std::function<void()> on_keep = {});
 
   // Outputs: a file of its own (created now; with `resume`, made again up to that cursor from
   // the file at `path`, see H5Output), or a shared one (a study's groups).
@@ -165,14 +169,16 @@ class World {
   DigSummary summary_;
   bool started_ = false;        // a dig or a plain run has begun
   bool sleep_applied_ = false;  // the scene's sleep settings are in force (LoadState)
-  double t_start_ = 0;    // time at which it began (after the bed) [s]
+  double t_start_ = 0;          // time at which it began (after the bed) [s]
   double next_row_ = 0;
   int64_t step0_ = 0;
-  int64_t particle_steps_ = 0;  // of the awake particles (all of them without sleeping)
-  std::vector<int> obstacle_meshes_;      // mesh indices of scene.obstacles
+  int64_t particle_steps_ = 0;           // of the awake particles (all of them without sleeping)
+  std::vector<int> obstacle_meshes_;     // mesh indices of scene.obstacles
   const RunControl* control_ = nullptr;  // during Run(): its on_pass_end
   int halted_after_pass_ = 0;            // on_pass_end returned false after this pass
   std::string pour_file_;                // KeepPour
+  double pour_every_ = 0;                // [s]
+  std::function<void()> on_keep_;
 };
 
 }  // namespace sim

@@ -344,6 +344,12 @@ int Main(int argc, char** argv) {
                    "join this run's in eq. 6-7 without being run again (rows only: peaks, beds, "
                    "cost); repeatable, a size run here or in an earlier file wins")
       ->check(CLI::ExistingFile);
+  size->add_option("--checkpoint-every", size_options.checkpoint_every,
+                   "Keep a running case's state (its pour so far, or its dig) every this many "
+                   "seconds of wall time and when stopped, so that the same command goes on "
+                   "from there bit for bit; 0 = never")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   size->add_flag("--list", size_options.list,
                  "Print the cases (index, name, settings, cost) and exit");
   size->add_flag("--no-plot", size_no_plot, "Do not draw DIR/size_*.png");

@@ -21,6 +21,14 @@ void SweepCommands::AddTo(CLI::App* app) {
                               "DEM threads per case; 0 = all cores (default: the scene's "
                               "`threads` when plain, 1 per rank under mpirun)")
                  ->check(CLI::Range(0, 4096));
+  sweep_
+      ->add_option("--checkpoint-every", sweep_options_.checkpoint_every,
+                   "Keep a running case's state (its pour so far, or its pass) in "
+                   "DIR/cases/<name>.parts/ every this many seconds of wall time and when "
+                   "stopped, so that the same command goes on from there bit for bit; 0 = never "
+                   "(a stopped case then restarts its pass, or its pour)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   sweep_->add_flag("--list", list_, "Print the cases (index, name, settings, cost) and exit");
   sweep_->add_flag("--no-table", no_table_, "Do not build DIR/table.h5 at the end");
   sweep_->add_flag("-q,--quiet", sweep_options_.quiet, "No progress line within a case");

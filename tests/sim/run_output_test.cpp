@@ -22,6 +22,7 @@
 #include <thread>
 #include <vector>
 
+#include "sim/saved_run.h"
 #include "tests/cli_util.h"
 
 namespace {
@@ -292,7 +293,8 @@ TEST_F(RunOutputTest, FullDiskGivesOneLineAndTrueRowCounts) {
 }
 
 // A pour SIGKILLed and then SIGINTed keeps the bed poured so far beside the output (a loadable
-// bed file), and the same command goes on from it to a full bed, removing it.
+// bed file), and the same command goes on from it to a full bed, removing it: the bed an
+// uninterrupted pour makes, bit for bit (its state hash).
 TEST_F(RunOutputTest, StoppedPourIsKeptAndGoesOn) {
   const std::string scene = WriteScene("tiny_dig_pour_kept.yaml", "", 0.02);
   const fs::path bed = TempDir() / "poured.h5";
@@ -324,6 +326,11 @@ TEST_F(RunOutputTest, StoppedPourIsKeptAndGoesOn) {
   }
   EXPECT_FALSE(fs::exists(kept));
   EXPECT_EQ(ReadRows(bed.string(), "/particles/radius").rows, 1450);
+  // A pour goes on from its keep's whole state: the bed is the uninterrupted pour's, bit for bit.
+  const fs::path whole = TempDir() / "poured_whole.h5";
+  EXPECT_EQ(Wait(Spawn({"bed", scene, "-o", whole.string()}, log)), 0) << ReadText(log);
+  EXPECT_EQ(sim::SavedRun(bed.string()).RootAttribute("state_hash"),
+            sim::SavedRun(whole.string()).RootAttribute("state_hash"));
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
 // Sweeps (sim/sweep.cpp): the sweep file (cases from a grid and a list, errors at load with the
 // line and key), status records, and end to end on scenes/sweeps/tiny.yaml (four cases, two
-// passes each): a plain run, a two-rank `mpirun` run, `--case I` and a run SIGKILLed mid-case
-// then resumed all give the same table and case rows, bit for bit.
+// passes each): a plain run, a two-rank `mpirun` run, `--case I` and runs SIGKILLed mid-case
+// (in a pass without checkpoints, in a pass with them, in the pour) then resumed all give the
+// same table and case rows, bit for bit.
 #include "sim/sweep.h"
 
 #include <gtest/gtest.h>
@@ -19,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "sim/bed_io.h"
+#include "sim/checkpoint.h"
 #include "sim/saved_run.h"
 #include "tests/cli_util.h"
 
@@ -295,11 +298,12 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
     EXPECT_FALSE(fs::exists(one / "table.h5"));
     ExpectSameData(plain / "cases" / "ice_b5.h5", one / "cases" / "ice_b5.h5", "sweep");
   }
-  {
-    SCOPED_TRACE("killed and resumed");
-    // Three cases done already (copied), then the sweep is SIGKILLed 0.3 s into snow_b10's
-    // second pass, then resumed.
-    const fs::path resumed = TempDir() / "resumed";
+  // Three cases done already (copied), then the sweep is SIGKILLed `kill` into snow_b10 with
+  // checkpoints every `every` seconds of wall time, then resumed: the same table and rows.
+  // Returns the resumed run's log.
+  const auto kill_and_resume = [&](const std::string& folder, const std::string& kill,
+                                   const std::string& every, const auto& while_killed) {
+    const fs::path resumed = TempDir() / folder;
     fs::create_directories(resumed / "cases");
     for (const char* name : {"snow_b5", "ice_b5", "ice_b10"}) {
       for (const char* ext : {".h5", ".status"}) {
@@ -307,35 +311,76 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
                       resumed / "cases" / (std::string(name) + ext));
       }
     }
-    const std::string killed_log = (TempDir() / "killed.log").string();
-    const std::string kill = "SCOOPSIM_SWEEP_KILL=snow_b10:2:0.3 " + std::string(SCOOPSIM_BINARY) +
-                             " sweep " + kTiny + " -o " + resumed.string() + " --threads 1 -q 2>" +
-                             killed_log;
-    const int killed = std::system(kill.c_str());
+    const std::string killed_log = (TempDir() / (folder + ".killed.log")).string();
+    const std::string cmd = "SCOOPSIM_SWEEP_KILL=snow_b10:" + kill + " " +
+                            std::string(SCOOPSIM_BINARY) + " sweep " + kTiny + " -o " +
+                            resumed.string() + " --threads 1 -q --checkpoint-every " + every +
+                            " 2>" + killed_log;
+    const int killed = std::system(cmd.c_str());
     EXPECT_TRUE(WIFSIGNALED(killed) || (WIFEXITED(killed) && WEXITSTATUS(killed) == 128 + SIGKILL))
         << killed << ": " << ReadText(killed_log);
-    const sim::CaseStatus status =
-        sim::ReadCaseStatus((resumed / "cases" / "snow_b10.status").string());
-    EXPECT_EQ(status.state, "running");
-    EXPECT_EQ(status.passes_done, 1);
-    const fs::path parts = resumed / "cases" / "snow_b10.parts";
-    EXPECT_TRUE(fs::exists(parts / "bed_1.h5"));
-    // The killed pass's file is still a readable HDF5 file (SWMR).
-    EXPECT_NO_THROW(sim::SavedRun((parts / "pass_2.h5").string()).SceneYaml());
     EXPECT_FALSE(fs::exists(resumed / "table.h5"));
+    while_killed(resumed / "cases" / "snow_b10.parts",
+                 sim::ReadCaseStatus((resumed / "cases" / "snow_b10.status").string()));
 
-    const std::string resume_log = (TempDir() / "resume.log").string();
-    ASSERT_EQ(scoopsim_test::RunScoopsim(
+    const std::string resume_log = (TempDir() / (folder + ".resume.log")).string();
+    EXPECT_EQ(scoopsim_test::RunScoopsim(
                   "sweep " + kTiny + " -o " + resumed.string() + " --threads 1 -q", resume_log),
               0)
         << ReadText(resume_log);
     const std::string text = ReadText(resume_log);
     for (const char* done : {"snow_b5 skipped", "ice_b5 skipped", "ice_b10 skipped"})
       EXPECT_NE(text.find(done), std::string::npos) << text;
-    EXPECT_NE(text.find("(resumed at pass 2)"), std::string::npos) << text;
-    EXPECT_EQ(text.find("pass 1:"), std::string::npos) << text;  // pass 1 was not run again
     ExpectSameData(plain / "table.h5", resumed / "table.h5");
     ExpectSameData(plain / "cases" / "snow_b10.h5", resumed / "cases" / "snow_b10.h5", "sweep");
+    EXPECT_FALSE(fs::exists(resumed / "cases" / "snow_b10.parts"));
+    return text;
+  };
+  {
+    SCOPED_TRACE("killed mid-pass without checkpoints: pass 2 starts again from bed_1");
+    const std::string text = kill_and_resume(
+        "resumed", "2:0.3", "0", [](const fs::path& parts, const sim::CaseStatus& status) {
+          EXPECT_EQ(status.state, "running");
+          EXPECT_EQ(status.passes_done, 1);
+          EXPECT_TRUE(fs::exists(parts / "bed_1.h5"));
+          EXPECT_FALSE(fs::exists(parts / "pass_2.restart.h5"));
+          // The killed pass's file is still a readable HDF5 file (SWMR).
+          EXPECT_NO_THROW(sim::SavedRun((parts / "pass_2.h5").string()).SceneYaml());
+        });
+    EXPECT_NE(text.find("(resumed at pass 2)"), std::string::npos) << text;
+    EXPECT_EQ(text.find("pass 1:"), std::string::npos) << text;  // pass 1 was not run again
+    EXPECT_EQ(text.find("goes on from"), std::string::npos) << text;
+  }
+  {
+    SCOPED_TRACE("killed mid-pass: pass 2 goes on from its last checkpoint");
+    const std::string text = kill_and_resume(
+        "resumed_checkpoint", "2:0.3", "0.02",
+        [](const fs::path& parts, const sim::CaseStatus& status) {
+          EXPECT_EQ(status.passes_done, 1);
+          EXPECT_GT(status.pass_cpu_s, 0);  // pass 2's CPU time up to its last checkpoint
+          // A checkpoint taken within pass 2, after the bed pass 1 left.
+          ASSERT_TRUE(fs::exists(parts / "pass_2.restart.h5"));
+          const double pass2_start =
+              sim::SavedRun((parts / "bed_1.h5").string()).RootNumber("time", 1e9);
+          EXPECT_GT(sim::ReadCheckpoint((parts / "pass_2.restart.h5").string()).time, pass2_start);
+        });
+    EXPECT_NE(text.find("snow_b10 goes on from"), std::string::npos) << text;
+    EXPECT_NE(text.find("(resumed at pass 2)"), std::string::npos) << text;
+  }
+  {
+    SCOPED_TRACE("killed in the pour: it goes on from its last keep");
+    const std::string text = kill_and_resume(
+        "resumed_pour", "0:0.2", "0.02", [](const fs::path& parts, const sim::CaseStatus& status) {
+          EXPECT_EQ(status.passes_done, 0);
+          EXPECT_GT(status.bed_cpu_s, 0);  // the pour's CPU time up to its keep
+          EXPECT_FALSE(fs::exists(parts / "bed_0.h5"));
+          sim::PourPoint point;
+          EXPECT_TRUE(sim::ReadPourPoint((parts / "pour.h5").string(),
+                                         sim::SavedRun((parts / "pour.h5").string()).SceneYaml(),
+                                         &point));
+          EXPECT_GT(point.poured, 0);
+        });
+    EXPECT_NE(text.find("the pour goes on from"), std::string::npos) << text;
   }
 }
 
