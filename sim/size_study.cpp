@@ -236,6 +236,7 @@ std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& sc
   const std::string first_key = "# scoopsim study particle-size ";
   const std::string smooth_key = "# smoothing: centred moving mean over ";
   std::vector<SizeRow> rows;
+  std::vector<int> row_lines;  // the line of each row
   std::string text;
   int line = 0;
   bool header = false, smoothing = false;
@@ -292,6 +293,11 @@ std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& sc
     SizeRow r;
     r.size_mm = v[0];
     if (!(r.size_mm > 0)) fail("size_mm", "a diameter > 0 [mm]", Shortest(r.size_mm));
+    for (size_t k = 0; k < rows.size(); ++k) {
+      if (rows[k].size_mm == r.size_mm)
+        fail("size_mm", "each size once (line " + std::to_string(row_lines[k]) + " has it)",
+             Shortest(r.size_mm));
+    }
     if (!(v[1] >= 1) || v[1] != std::floor(v[1]) || v[1] > 1000)
       fail("beds", "a number of beds in 1..1000", Shortest(v[1]));
     r.beds = static_cast<int>(v[1]);
@@ -311,6 +317,7 @@ std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& sc
     ordered(2, r.peak_force_min, r.peak_force_mean, r.peak_force_max);
     ordered(8, r.peak_torque_min, r.peak_torque_mean, r.peak_torque_max);
     rows.push_back(r);
+    row_lines.push_back(line);
   }
   if (line == 0) fail("", "a size_study.csv of `scoopsim study particle-size`", "an empty file");
   if (!smoothing) fail("smoothing", "a line '" + smooth_key + "W s...'", "none");

@@ -118,8 +118,9 @@ std::vector<SizeRow> ScoreSizes(std::vector<SizeRow> rows, double tolerance_pct)
 // (its MPEs are recomputed here, against whatever is finest now). The file must be one of the
 // same study: its first line names a scene with the same file name as `scene_path`, its
 // smoothing line the same window `smooth_s` [s]; its header line is SizeCsvHeader(); each row
-// has beds >= 1 and finite peaks with 0 < min <= mean <= max (1e-9 relative slack). Anything
-// else throws InputError naming the file, the line, the column and what was expected.
+// has beds >= 1 and finite peaks with 0 < min <= mean <= max (1e-9 relative slack), and no
+// size comes twice. Anything else throws InputError naming the file, the line, the column and
+// what was expected.
 std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& scene_path,
                                   double smooth_s);
 

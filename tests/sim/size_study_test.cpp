@@ -249,6 +249,7 @@ TEST(SizeStudyMpeTest, EarlierRunsRowsAreReadAndBadFilesRefused) {
       {"order", csv_head + "5.25,2,1.2,1.1,1.16,0,0,0,0.08,0.081,0.083,0,0,0,1,7\n",
        "peak_force_mean", 5, 0.05},
       {"no_rows", csv_head, "", 4, 0.05},
+      {"twice", csv_head + good_row + "\n" + good_row + "\n", "size_mm", 6, 0.05},
   };
   for (const Bad& b : bad) {
     SCOPED_TRACE(b.name);
