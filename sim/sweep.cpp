@@ -803,7 +803,8 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& 
       if (done == 0 && !fs::exists(first_bed)) {
         // A pour kept by an earlier attempt goes on; its CPU time up to that keep counts.
         PourPoint kept;
-        const bool goes_on = ReadPourPoint(paths.Pour().string(), scene.yaml_text, &kept);
+        const bool goes_on =
+            every > 0 && ReadPourPoint(paths.Pour().string(), scene.yaml_text, &kept);
         const double cpu_before = goes_on ? status.bed_cpu_s : 0.0;
         status.bed_cpu_s = cpu_before;
         record("running", 0, "making the bed");
