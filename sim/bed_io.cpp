@@ -137,9 +137,7 @@ h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& syste
     h5::WriteDoubleAttribute(root.get(), "pour_layer_t0", pour->layer_t0);
     h5::WriteDoubleAttribute(root.get(), "pour_layer_fall", pour->layer_fall);
     h5::WriteDoubleAttribute(root.get(), "pour_layer_settled", pour->settled ? 1.0 : 0.0);
-    const std::vector<char> state = system.SaveState();
-    h5::WriteArray(file.get(), "/pour_state", H5T_STD_U8LE, H5T_NATIVE_UCHAR, state.data(),
-                   state.size(), 1);
+    h5::WriteBytes(file.get(), "/pour_state", system.SaveState());
   }
 
   // Particles: the snapshot holds the arrays; /particles links to them and adds force, torque.
@@ -420,11 +418,7 @@ bool ReadPourPoint(const std::string& path, const std::string& scene_yaml, PourP
     pour->started = true;
     if (state != nullptr) {
       state->clear();
-      if (in.Exists("/pour_state")) {
-        const std::vector<uint8_t> b =
-            in.Read<uint8_t>("/pour_state", H5T_INTEGER, H5T_NATIVE_UINT8, -1, 1);
-        state->assign(b.begin(), b.end());
-      }
+      if (in.Exists("/pour_state")) *state = in.ReadBytes("/pour_state");
     }
     return true;
   } catch (const std::exception&) {

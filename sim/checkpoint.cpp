@@ -18,10 +18,6 @@ using h5::CheckId;
 using h5::CheckOk;
 using h5::Handle;
 
-void WriteBytes(hid_t file, const char* name, const std::vector<char>& bytes) {
-  h5::WriteArray(file, name, H5T_STD_U8LE, H5T_NATIVE_UCHAR, bytes.data(), bytes.size(), 1);
-}
-
 }  // namespace
 
 std::string CheckpointPath(const std::string& output) {
@@ -40,9 +36,9 @@ void WriteCheckpoint(const std::string& path, const Checkpoint& c) {
     h5::WriteStringAttribute(root.get(), "scene_path", c.scene_path);
     h5::WriteStringAttribute(root.get(), "scene_yaml", c.scene_yaml);
     h5::WriteDoubleAttribute(root.get(), "time", c.time);
-    WriteBytes(file.get(), "dem_state", c.dem_state);
-    WriteBytes(file.get(), "world_state", c.world_state);
-    WriteBytes(file.get(), "output_state", c.output_state);
+    h5::WriteBytes(file.get(), "dem_state", c.dem_state);
+    h5::WriteBytes(file.get(), "world_state", c.world_state);
+    h5::WriteBytes(file.get(), "output_state", c.output_state);
     root.reset();
     CheckOk(file.reset(), "H5Fclose " + temporary);
     fs::rename(temporary, path);
@@ -74,13 +70,9 @@ Checkpoint ReadCheckpoint(const std::string& path) {
   c.scene_path = in.ReadStringAttribute("/", "scene_path");
   c.scene_yaml = in.ReadStringAttribute("/", "scene_yaml");
   c.time = in.ReadDoubleAttribute("/", "time");
-  auto bytes = [&](const char* name) {
-    const std::vector<uint8_t> b = in.Read<uint8_t>(name, H5T_INTEGER, H5T_NATIVE_UINT8, -1, 1);
-    return std::vector<char>(b.begin(), b.end());
-  };
-  c.dem_state = bytes("/dem_state");
-  c.world_state = bytes("/world_state");
-  c.output_state = bytes("/output_state");
+  c.dem_state = in.ReadBytes("/dem_state");
+  c.world_state = in.ReadBytes("/world_state");
+  c.output_state = in.ReadBytes("/output_state");
   return c;
 }
 

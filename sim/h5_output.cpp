@@ -221,6 +221,10 @@ void WriteArray(hid_t location, const std::string& name, hid_t file_type, hid_t 
   }
 }
 
+void WriteBytes(hid_t location, const std::string& name, const std::vector<char>& bytes) {
+  WriteArray(location, name, H5T_STD_U8LE, H5T_NATIVE_UCHAR, bytes.data(), bytes.size(), 1);
+}
+
 std::vector<size_t> IdOrder(const dem::Particles& particles) {
   const std::vector<int64_t>& id = particles.id;
   std::vector<size_t> order(id.size());

@@ -119,6 +119,11 @@ std::vector<dem::Vec3> Reader::ReadVectors(const std::string& name, int64_t rows
   return out;
 }
 
+std::vector<char> Reader::ReadBytes(const std::string& name) const {
+  const std::vector<uint8_t> b = Read<uint8_t>(name, H5T_INTEGER, H5T_NATIVE_UINT8, -1, 1);
+  return std::vector<char>(b.begin(), b.end());
+}
+
 std::vector<std::string> Reader::ReadStrings(const std::string& name) const {
   const Handle dataset = OpenDataset(name);
   const Handle space(CheckId(H5Dget_space(dataset.get()), "H5Dget_space " + name), H5Sclose);

@@ -99,6 +99,8 @@ std::string ReadStringAttribute(hid_t object, const std::string& name);
 constexpr hsize_t kSnapshotChunkRows = 16384;
 void WriteArray(hid_t location, const std::string& name, hid_t file_type, hid_t memory_type,
                 const void* data, hsize_t rows, hsize_t width);
+// Writes an opaque serialised state (System::SaveState and the like) as a 1-D uint8 dataset.
+void WriteBytes(hid_t location, const std::string& name, const std::vector<char>& bytes);
 
 // Storage indices of the particles sorted by persistent id (output is always in id order).
 std::vector<size_t> IdOrder(const dem::Particles& particles);
@@ -189,6 +191,8 @@ class Reader {
   }
   // Floating-point (rows x 3) as vectors; `rows` < 0 accepts any row count.
   std::vector<dem::Vec3> ReadVectors(const std::string& name, int64_t rows) const;
+  // A 1-D uint8 dataset written by WriteBytes, any length.
+  std::vector<char> ReadBytes(const std::string& name) const;
   // A 1-D dataset of strings (variable- or fixed-length).
   std::vector<std::string> ReadStrings(const std::string& name) const;
 
