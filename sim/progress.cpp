@@ -5,8 +5,8 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstdarg>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <utility>
 #include <vector>
@@ -14,12 +14,12 @@
 namespace sim {
 namespace {
 
-constexpr double kTtyPeriod = 0.25;      // seconds between rewrites of the live line
-constexpr double kFirstLine = 0.5;       // seconds before the first plain (not a terminal) line
-constexpr double kSamplePeriod = 0.1;    // seconds between the samples of the recent rate
-constexpr double kMinWindow = 2.0;       // the recent past is at least this long [s]
-constexpr double kWindowFraction = 0.25; // and at least this share of the elapsed time
-constexpr double kMaxClock = 1e7;        // a clock reads "--:--" from here (116 days) [s]
+constexpr double kTtyPeriod = 0.25;       // seconds between rewrites of the live line
+constexpr double kFirstLine = 0.5;        // seconds before the first plain (not a terminal) line
+constexpr double kSamplePeriod = 0.1;     // seconds between the samples of the recent rate
+constexpr double kMinWindow = 2.0;        // the recent past is at least this long [s]
+constexpr double kWindowFraction = 0.25;  // and at least this share of the elapsed time
+constexpr double kMaxClock = 1e7;         // a clock reads "--:--" from here (116 days) [s]
 
 double Seconds(std::chrono::steady_clock::duration d) {
   return std::chrono::duration<double>(d).count();
@@ -42,6 +42,7 @@ std::string Clock(double seconds) {
 namespace {
 
 // "label  42.0%  t 0.021/0.05 s  elapsed 0:12  ETA 0:17  3.21 M particle-steps/s"
+// (`particle_steps`: those of this sitting, done in `elapsed`).
 std::string Line(const std::string& label, double fraction, double total_time, double sim_time,
                  int64_t particle_steps, double elapsed, double eta, bool upper_bound = false) {
   const double rate = elapsed > 0 ? static_cast<double>(particle_steps) / elapsed / 1e6 : 0.0;
@@ -69,25 +70,35 @@ void Status(const char* format, ...) {
   std::fflush(stderr);
 }
 
-Progress::Progress(std::string label, double total_time, bool quiet, double log_period)
+Progress::Progress(std::string label, double total_time, bool quiet, double log_period,
+                   std::function<double()> wall_clock)
     : label_(std::move(label)),
       total_time_(total_time),
       quiet_(quiet),
       tty_(isatty(STDERR_FILENO) == 1),
       log_period_(log_period),
       eta_(std::nan("")),
-      start_(std::chrono::steady_clock::now()),
+      wall_clock_(
+          wall_clock ? std::move(wall_clock)
+                     : [] { return Seconds(std::chrono::steady_clock::now().time_since_epoch()); }),
+      start_(wall_clock_()),
       last_print_(start_) {}
+
+void Progress::Begin(double sim_time, int64_t particle_steps) {
+  sim0_ = sim_time;
+  steps0_ = particle_steps;
+  samples_.clear();
+}
 
 void Progress::Update(double sim_time, int64_t particle_steps) {
   if (quiet_) return;
-  const auto now = std::chrono::steady_clock::now();
-  const double elapsed = Seconds(now - start_);
+  const double now = wall_clock_();
+  const double elapsed = now - start_;
   if (samples_.empty() || elapsed - samples_.back().elapsed >= kSamplePeriod)
     samples_.push_back({elapsed, sim_time});
   // The first plain line comes after about a second, so that a log shows the run has started.
   const double period = tty_ ? kTtyPeriod : (printed_ ? log_period_ : kFirstLine);
-  if (Seconds(now - last_print_) < period) return;
+  if (now - last_print_ < period) return;
   last_print_ = now;
   printed_ = true;
   // ETA: the simulated time left at the rate of the recent past.
@@ -101,12 +112,13 @@ void Progress::Update(double sim_time, int64_t particle_steps) {
   // whole run's rate (steady, but blind to a change). On scenes/sleep_check.yaml's dig, whose cost
   // per simulated second varies 1.5x, the mean errs least (bench/eta_check.sh).
   const double recent = d_sim > 0 && d_wall > 0 ? left * d_wall / d_sim : std::nan("");
-  const double overall = sim_time > 0 ? left * elapsed / sim_time : std::nan("");
+  const double done = sim_time - sim0_;  // by this sitting
+  const double overall = done > 0 ? left * elapsed / done : std::nan("");
   eta_ = std::isfinite(recent) ? 0.5 * (recent + overall) : overall;
   const double fraction =
       total_time_ > 0 ? std::min(1.0, std::max(0.0, sim_time / total_time_)) : 0.0;
-  const std::string line =
-      Line(label_, fraction, total_time_, sim_time, particle_steps, elapsed, eta_, open_ended_);
+  const std::string line = Line(label_, fraction, total_time_, sim_time, particle_steps - steps0_,
+                                elapsed, eta_, open_ended_);
   if (tty_) {
     std::fprintf(stderr, "\r%s\x1b[K", line.c_str());  // ESC[K clears the rest of the old line
     g_live_line = true;
@@ -118,12 +130,13 @@ void Progress::Update(double sim_time, int64_t particle_steps) {
 
 void Progress::Finish(double sim_time, int64_t particle_steps, bool done) {
   if (quiet_) return;
-  const auto now = std::chrono::steady_clock::now();
+  const double now = wall_clock_();
   last_print_ = now;
-  const double fraction =
-      done ? 1.0 : total_time_ > 0 ? std::min(1.0, std::max(0.0, sim_time / total_time_)) : 0.0;
-  const std::string line = Line(label_, fraction, total_time_, sim_time, particle_steps,
-                                Seconds(now - start_), done ? 0.0 : std::nan(""));
+  const double fraction = done              ? 1.0
+                          : total_time_ > 0 ? std::min(1.0, std::max(0.0, sim_time / total_time_))
+                                            : 0.0;
+  const std::string line = Line(label_, fraction, total_time_, sim_time, particle_steps - steps0_,
+                                now - start_, done ? 0.0 : std::nan(""));
   std::fprintf(stderr, tty_ ? "\r%s\x1b[K\n" : "%s\n", line.c_str());
   g_live_line = false;
   std::fflush(stderr);
@@ -137,8 +150,12 @@ struct NamedPhase {
 };
 
 std::vector<NamedPhase> Named(const dem::PhaseTimes& p, double wall) {
-  return {{"pairs", p.pairs},   {"integrate", p.integrate}, {"rebuild", p.rebuild},
-          {"near", p.near},     {"mesh", p.mesh},           {"sleep", p.sleep},
+  return {{"pairs", p.pairs},
+          {"integrate", p.integrate},
+          {"rebuild", p.rebuild},
+          {"near", p.near},
+          {"mesh", p.mesh},
+          {"sleep", p.sleep},
           {"other", std::max(0.0, wall - p.Total())}};
 }
 

@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -23,7 +24,13 @@ std::string Clock(double seconds);
 class Progress {
  public:
   // `label` starts each line; `total_time` is the simulated time of the whole run [s].
-  Progress(std::string label, double total_time, bool quiet = false, double log_period = 10.0);
+  // `wall_clock` gives seconds (a test's fake clock); by default std::chrono::steady_clock.
+  Progress(std::string label, double total_time, bool quiet = false, double log_period = 10.0,
+           std::function<double()> wall_clock = nullptr);
+  // The run goes on from a kept state (a checkpoint, a kept pour) at `sim_time` with
+  // `particle_steps` already done: the percent and the time shown are the whole run's, the rate
+  // and the ETA only this sitting's work. Call before the first Update.
+  void Begin(double sim_time, int64_t particle_steps);
   // Call every step or every few steps: sim_time [s], particle_steps done so far.
   void Update(double sim_time, int64_t particle_steps);
   // Final line (newline on a terminal); `done`: the run reached its end (shown as 100%).
@@ -48,8 +55,11 @@ class Progress {
   bool printed_ = false;
   bool open_ended_ = false;
   double eta_;
+  double sim0_ = 0;              // simulated time at Begin [s]
+  int64_t steps0_ = 0;           // particle-steps at Begin
   std::vector<Sample> samples_;  // (elapsed, sim_time) about every 0.1 s, for the recent rate
-  std::chrono::steady_clock::time_point start_, last_print_;
+  std::function<double()> wall_clock_;
+  double start_, last_print_;  // wall_clock_ readings [s]
 };
 
 // printf to stderr for status lines: clears a live progress line first, so a message never

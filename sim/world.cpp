@@ -97,10 +97,12 @@ int World::Pour(bool quiet, SettleReport* report) {
   }
   Progress progress("bed", scene_.bed.settle_max_time, quiet);
   progress.set_open_ended(true);  // settling ends when the bed is at rest, often well before
-  const double t0 = system_->time();
+  // The time shown is the pour's own (a pour starts a fresh system at t = 0); a resumed pour's
+  // rate and ETA count from where it went on.
   auto particle_steps = [&] {
     return system_->step_count() * static_cast<int64_t>(system_->particles().size());
   };
+  progress.Begin(system_->time(), particle_steps());
   // The bed so far goes to the keep file every output.flush_seconds and when stopped.
   auto last_keep = std::chrono::steady_clock::now();
   double keep_every = pour_every_;
@@ -116,14 +118,14 @@ int World::Pour(bool quiet, SettleReport* report) {
   r = FillAndSettle(
       scene_, system_.get(),
       [&](const dem::System& s) {
-        progress.Update(s.time() - t0, particle_steps());
+        progress.Update(s.time(), particle_steps());
         if (!pour_file_.empty() && point.started && !StopRequested() &&
             Seconds(std::chrono::steady_clock::now() - last_keep) >= keep_every)
           keep();
         return !StopRequested();
       },
       &point);
-  progress.Finish(system_->time() - t0, particle_steps());
+  progress.Finish(system_->time(), particle_steps());
   // (A pour that has ended is not kept: the bed is whole, and is made ready and returned.)
   const bool ended = point.settled && point.poured >= scene_.bed.count;
   if (!pour_file_.empty() && StopRequested() && point.started && !ended && r.status.ok()) {
@@ -541,6 +543,7 @@ RunResult World::Run(const RunControl& control) {
   dem::System& system = *system_;
   if (!dig_ && !started_) StartPlain();
   Progress progress(dig_ ? "dig" : "run", PlannedDuration(), control.quiet);
+  progress.Begin(system.time() - t_start_, particle_steps_);  // a resumed run: from its checkpoint
   const auto wall0 = std::chrono::steady_clock::now();
   const dem::PhaseTimes phases0 = system.phase_times();
 

@@ -285,5 +285,27 @@ TEST(PreflightTest, ProgressClockPrintsOnlyPhysicalTimes) {
     EXPECT_EQ(Clock(bad), "--:--");
 }
 
+// A run that goes on from a kept state at t = 0.5 s of its 1 s, 3e9 particle-steps done: the line
+// shows the whole run's time and percent, but the rate and the ETA count only this sitting. A
+// fake clock ticks 1 s per update, each update 0.05 s simulated and 1e6 particle-steps: at
+// t = 0.7 s the rate is 4e6 / 4 s = 1 M/s, and the ETA, both at the whole sitting's rate and at
+// the last 2 s's, is (1 - 0.7) s / (0.05 s/s) = 6 s. Counted from t = 0 and 0 steps, the rate
+// would read 751 M/s and the ETA 3.86 s (0.3 * 4 / 0.7 and 6, averaged).
+TEST(PreflightTest, ResumedProgressCountsOnlyThisSitting) {
+  double now = 100;
+  Progress progress("dig", 1.0, false, 1.0, [&now] { return now; });
+  progress.Begin(0.5, 3'000'000'000);
+  testing::internal::CaptureStderr();
+  for (int k = 1; k <= 4; ++k) {
+    now += 1.0;
+    progress.Update(0.5 + 0.05 * k, 3'000'000'000 + 1'000'000 * k);
+  }
+  const std::string text = testing::internal::GetCapturedStderr();
+  EXPECT_NEAR(progress.eta(), 6.0, 1e-9);
+  EXPECT_NE(text.find("dig  70.0%  t 0.7/1 s  elapsed 0:04  ETA 0:06  1 M particle-steps/s"),
+            std::string::npos)
+      << text;
+}
+
 }  // namespace
 }  // namespace sim
