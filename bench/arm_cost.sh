@@ -2,7 +2,8 @@
 # The coupling's cost: the same dig with the scoop on the arm (Bullet, coupled every step) and on
 # its prescribed path (KinematicDriver), as interleaved runs (kinematic, coupled, kinematic, ...)
 # from one saved bed, so that a shared host's slow spells hit both alike. Prints each run's dig
-# wall time (simulated / the printed real-time factor: 3 digits) and the run's CPU time (user +
+# wall time (simulated / the printed real-time factor: 3 digits; the thread count held fixed, since
+# the governor's probes of fewer threads would differ between runs) and the run's CPU time (user +
 # sys, bed load included: the same for both), the medians, their ratios (coupled / kinematic)
 # and the coupled dig's real-time factor (simulated / wall); appends one CSV row per run to
 # bench/results/$MACHINE/arm_cost.csv.
@@ -50,7 +51,7 @@ PY
 TIMEFORMAT='%U %S'  # bash's `time`: the run's user and system CPU seconds
 for r in $(seq "$NRUNS"); do
   for d in kinematic coupled; do
-    { time "$BIN" run "$work/$d.yaml" -o "$work/$d.h5" --threads "$THREADS" --quiet \
+    { time "$BIN" run "$work/$d.yaml" -o "$work/$d.h5" --threads "$THREADS" --fixed-threads --quiet \
       2>"$work/err" >/dev/null; } 2>"$work/cpu"
     sim=$(sed -n 's/^scoopsim: dig: .* steps, \([0-9.e+-]*\) s simulated.*/\1/p' "$work/err")
     rtf=$(sed -n 's/^scoopsim: dig: [0-9.]* s wall (\([0-9.e+-]*\) x real time.*/\1/p' "$work/err")

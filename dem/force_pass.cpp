@@ -472,7 +472,8 @@ PassArrays TakeArrays(Workspace& m, Particles& p, const SystemConfig& config, in
 }  // namespace
 
 void ComputeForces(Workspace& m, Particles& p, const SystemConfig& config, int nm, int nt,
-                   PhaseTimes* times, std::vector<Vec3>* plane_force) {
+                   PhaseTimes* times, std::vector<Vec3>* plane_force,
+                   const std::function<void()>& motion) {
   const int nslabs = m.list.num_slabs();
   const int np = static_cast<int>(config.planes.size());
   m.slab_overlap.assign(nslabs, 0.0);
@@ -527,9 +528,18 @@ void ComputeForces(Workspace& m, Particles& p, const SystemConfig& config, int n
       runs[phase * nt + r].end =
           r + 1 < nt ? runs[phase * nt + r + 1].next.load(std::memory_order_relaxed) : count;
   }
+  double t_motion = 0;  // the time `motion` took on its thread
+  int team = 1;         // the threads the runtime gave
 #pragma omp parallel num_threads(nt)
   {
     const int t = omp_get_thread_num();
+    // The caller's work, on the team's last thread; the others take this one's slabs meanwhile.
+    if (motion && t == omp_get_num_threads() - 1) {
+      team = omp_get_num_threads();
+      const double t0 = Now();
+      motion();
+      t_motion = Now() - t0;
+    }
     for (int phase = 0; phase < 2; ++phase) {
       for (int d = 0; d < nt; ++d) {  // its own run, then what is left of the others'
         SlabRuns::Run& run = runs[phase * nt + (t + d) % nt];
@@ -561,7 +571,8 @@ void ComputeForces(Workspace& m, Particles& p, const SystemConfig& config, int n
     worst = std::max(worst, m.slab_overlap[s]);
   }
   m.max_overlap = worst;
-  times->pairs += Now() - t_pairs;
+  // On one thread `motion` ran in series: not a part of the pair forces' time.
+  times->pairs += Now() - t_pairs - (team == 1 ? t_motion : 0.0);
 }
 
 }  // namespace dem::internal

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "dem/system.h"
@@ -53,9 +54,12 @@ void BuildNear(Workspace& m, const Particles& p, bool sleeping, int nt);
 
 // Adds the contact forces and torques to p.f and p.t (which hold gravity already), refreshing the
 // stale lists first; the force on each plane goes to plane_force (num_planes). nm: number of
-// materials. Adds its time to times->near and times->pairs.
+// materials. Adds its time to times->near and times->pairs. `motion` (System::Step's, may be
+// empty) is called once, by the last of the nt threads before it takes its slabs (the others take
+// them meanwhile); on one thread its time is left out of times->pairs.
 void ComputeForces(Workspace& m, Particles& p, const SystemConfig& config, int nm, int nt,
-                   PhaseTimes* times, std::vector<Vec3>* plane_force);
+                   PhaseTimes* times, std::vector<Vec3>* plane_force,
+                   const std::function<void()>& motion);
 
 // --- dem/mesh_contact.cpp: triangle-mesh walls -------------------------------------------------
 

@@ -197,7 +197,7 @@ void System::set_adaptive_threads(bool on, const GovernorConfig& config) {
 // and drift, the neighbour list made again if the drift asks for it, the forces (pairs and
 // planes, then meshes), the second half kick, the sleep checks and the health checks. Each phase
 // is a function of dem/internal_phases.h; the time each takes goes to phase_times_.
-StepStatus System::Step() {
+StepStatus System::Step(const std::function<void()>& motion) {
   internal::Workspace& m = *ws_;
   const double dt = config_.time_step;
   const bool sleeping = config_.sleep.enabled;
@@ -232,8 +232,8 @@ StepStatus System::Step() {
   }
 
   // Forces.
-  internal::ComputeForces(m, p_, config_, materials_.size(), nt, &phase_times_,
-                          &plane_force_);  // adds its own phases (near, pairs)
+  internal::ComputeForces(m, p_, config_, materials_.size(), nt, &phase_times_, &plane_force_,
+                          motion);  // adds its own phases (near, pairs); calls `motion`
   t_phase = internal::Now();
   if (!m.meshes.empty()) {
     internal::MeshForces(m, p_, dt, config_.mesh_rolling_torque, nt);

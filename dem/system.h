@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -128,7 +129,8 @@ struct PhaseTimes {
   double integrate = 0;  // the two half kicks, the drift test and the clumps' moves
   double rebuild = 0;    // neighbour-list builds (and the storage reorder that goes with them)
   double near = 0;       // near-list, busy-list and plane-visit builds
-  double pairs = 0;      // particle-particle and particle-plane forces
+  double pairs = 0;      // particle-particle and particle-plane forces (on 2+ threads with
+                         // Step()'s `motion` beside them)
   double mesh = 0;       // particle-mesh forces (with the mesh's candidate lists)
   double sleep = 0;      // sleep and wake checks, and the list of awake particles
   double Total() const { return integrate + rebuild + near + pairs + mesh + sleep; }
@@ -158,7 +160,12 @@ class System {
   void RemoveParticles(const std::vector<int64_t>& ids);
 
   // Advances one time step (velocity Verlet). Never throws; reports its health.
-  StepStatus Step();
+  // `motion`, when given, is called once during the step, before anything reads a mesh's pose, to
+  // set the meshes' motion for this step (SetMeshMotion, and nothing else of this System): a
+  // coupled rigid-body step (the arm) then runs on one of the step's threads while the others
+  // compute the pair forces, instead of before the step. It must not throw. On one thread it runs
+  // in series and its time is not counted in any phase (PhaseTimes).
+  StepStatus Step(const std::function<void()>& motion = {});
 
   const MaterialTable& materials() const { return materials_; }
   const SystemConfig& config() const { return config_; }
@@ -182,7 +189,8 @@ class System {
   int num_meshes() const;
   const TriangleMesh& mesh(int k) const;
   // Pose and twist of mesh k at the end of the coming step (time() + time_step), when Step()
-  // evaluates the forces. Call before every Step() while the mesh moves.
+  // evaluates the forces. Call before every Step() while the mesh moves, or from Step()'s
+  // `motion`.
   void SetMeshMotion(int k, const MeshMotion& motion);
   const MeshMotion& mesh_motion(int k) const;
   MeshWrench mesh_wrench(int k) const;

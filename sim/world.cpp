@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 
 #include "dem/archive.h"
@@ -441,10 +442,14 @@ dem::StepStatus World::Step() noexcept {
   }
   if (dig_ && Done()) return {};  // the scene's duration bounds Run(), not a plain Step()
   if (dig_) {
-    // The scoop's pose at the end of the coming step, where Step() evaluates forces.
+    // The scoop's pose at the end of the coming step, where Step() evaluates forces. The driver
+    // (the arm's Bullet step) runs inside the step, beside the pair forces (dem/system.h): the
+    // DEM does not read the scoop's pose before then.
     const double tau = system.time() + scene_.time_step - dig_->pass_t0;
-    system.SetMeshMotion(dig_->mesh, dig_->driver->MotionAt(tau));
-    const dem::StepStatus status = system.Step();
+    const std::function<void()> motion = [this, &tau] {  // small enough to need no allocation
+      system_->SetMeshMotion(dig_->mesh, dig_->driver->MotionAt(tau));
+    };
+    const dem::StepStatus status = system.Step(motion);
     const dem::NeighborStats stats = system.neighbor_stats();
     particle_steps_ += stats.awake;
     summary_.peak_overlap = std::max(summary_.peak_overlap, stats.max_overlap);
