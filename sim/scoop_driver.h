@@ -5,8 +5,10 @@
 // The loop's calls, for each pass p = 1..passes:
 //   BeginPass(p, bed)            once, on the bed as the previous pass left it
 //   repeat while !PassOver(tau):
-//     MotionAt(tau + dt)         the scoop's pose and twist at the end of the coming step
-//     (one DEM step)
+//     MotionAt(tau + dt)         the scoop's pose and twist at the end of the coming step,
+//                                called inside that DEM step (dem::System::Step's `motion`), on
+//                                one of its threads while the others compute pair forces: it
+//                                must not touch the DEM system
 //     Feedback(tau + dt, wrench) what the particles did to the scoop over that step
 // where tau is the time since the pass began. A driver never throws inside the loop.
 // Output: Record(out, time) each time the loop writes a /scoop/ row, Finish(out) once when the run
