@@ -574,17 +574,27 @@ CasePaths PathsOf(const SweepCase& c, const std::string& dir) {
           cases / (c.name + ".parts")};
 }
 
-// Test hook: SCOOPSIM_SWEEP_KILL=<case>:<pass>:<seconds> SIGKILLs the process that many simulated
-// seconds into that pass of that case (the uncontrolled stop a resume must survive); pass 0 is
-// the pour, killed just after its first keep that many simulated seconds in.
-double KillAfter(const SweepCase& c, int pass) {
-  const char* hook = std::getenv("SCOOPSIM_SWEEP_KILL");
-  if (hook == nullptr) return 0;
-  const std::string s = hook;
-  const size_t a = s.find(':'), b = s.rfind(':');
-  if (a == std::string::npos || b == a) return 0;
-  if (s.substr(0, a) != c.name || std::atoi(s.substr(a + 1, b - a - 1).c_str()) != pass) return 0;
-  return std::atof(s.substr(b + 1).c_str());
+// Test hook: SCOOPSIM_SWEEP_KILL=<case>:<pass>:<seconds>[:TERM] SIGKILLs the process that many
+// simulated seconds into that pass of that case (the uncontrolled stop a resume must survive);
+// pass 0 is the pour, killed just after its first keep that many simulated seconds in. With
+// :TERM it raises SIGTERM instead (the controlled stop), just after a keep in a pass too.
+struct KillHook {
+  double after = 0;  // simulated seconds into the pass; 0: no hook for this case and pass
+  int signal = SIGKILL;
+};
+KillHook KillAfter(const SweepCase& c, int pass) {
+  KillHook hook;
+  const char* text = std::getenv("SCOOPSIM_SWEEP_KILL");
+  if (text == nullptr) return hook;
+  std::vector<std::string> fields;
+  std::stringstream in(text);
+  for (std::string field; std::getline(in, field, ':');) fields.push_back(field);
+  if (fields.size() < 3 || fields.size() > 4 || fields[0] != c.name ||
+      std::atoi(fields[1].c_str()) != pass)
+    return hook;
+  hook.after = std::atof(fields[2].c_str());
+  if (fields.size() == 4 && fields[3] == "TERM") hook.signal = SIGTERM;
+  return hook;
 }
 
 // The datasets under `group` of a file, recursively, in name order (snapshots left out).
@@ -811,11 +821,14 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& 
         const double cpu0 = CpuSeconds();
         World world(scene, threads);
         if (every > 0) {
-          const double kill_after = KillAfter(c, 0);
+          const KillHook kill = KillAfter(c, 0);
           world.KeepPour(paths.Pour().string(), every, [&] {
             status.bed_cpu_s = cpu_before + (CpuSeconds() - cpu0);
             record("running", 0, "making the bed");
-            if (kill_after > 0 && world.system().time() >= kill_after) std::raise(SIGKILL);
+            // (Once: the keep written when stopped calls this again, and a second SIGTERM
+            // is the user's "now".)
+            if (kill.after > 0 && world.system().time() >= kill.after && !StopRequested())
+              std::raise(kill.signal);
           });
         }
         SettleReport report;
@@ -865,7 +878,9 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& 
       }
       RunControl control;
       control.quiet = quiet;
-      control.stop_after = KillAfter(c, pass);
+      const KillHook kill = KillAfter(c, pass);
+      if (kill.signal == SIGKILL) control.stop_after = kill.after;
+      const double kill_at = world.system().time() + kill.after;
       control.on_pass_end = [&](int ended) {
         if (ended < passes) SaveBed(paths.Bed(ended).string(), world.system(), scene.yaml_text);
         return false;  // one pass per World
@@ -877,6 +892,9 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& 
           status.pass_wall_s = pass_wall();
           status.pass_cpu_s = cpu_before + (CpuSeconds() - cpu0);
           record("running", 0, "pass " + std::to_string(pass));
+          if (kill.signal == SIGTERM && kill.after > 0 && world.system().time() >= kill_at &&
+              !StopRequested())
+            std::raise(SIGTERM);
         };
       }
       const RunResult result = world.Run(control);
@@ -963,6 +981,15 @@ void Log::Skipped(const SweepCase& c) {
 
 void Log::Finished(const SweepCase& c, int rank, const CaseOutcome& outcome) {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (outcome.exit_status == kExitStopped) {
+    // Stopped by SIGINT/SIGTERM: not a failure and not finished; its kept state (the bed's
+    // pour file, the running pass's restart file) is where the same command goes on.
+    Status(
+        "scoopsim: sweep: [%d/%zu] %s stopped after %.1f s (rank %d): kept; the same command "
+        "goes on from its last keep\n",
+        c.index, sweep_.cases.size(), c.name.c_str(), outcome.wall, rank);
+    return;
+  }
   done_cost_ += c.estimate;
   ++finished_;
   const double elapsed =

@@ -45,7 +45,10 @@
 //   DIR/cases/<name>.lock      flock'ed while a process runs the case (two never run one case)
 //   DIR/table.h5               the wrench table (sim/wrench_table.h), built when every case is done
 // Test hook: SCOOPSIM_SWEEP_KILL=<case>:<pass>:<seconds> SIGKILLs the process that many simulated
-// seconds into that pass of that case (pass 0: the pour, just after a keep).
+// seconds into that pass of that case (pass 0: the pour, just after a keep); with :TERM appended
+// it raises SIGTERM instead, just after a keep (pour or pass; a pass keeps only with
+// --checkpoint-every): the case is then kept, its status `stopped`, its line "stopped ...
+// kept", and the sweep exits 130.
 //
 // Each pass runs in a fresh World from the bed the previous pass left (saved, then loaded), in
 // an uninterrupted run as in a resumed one, so a resumed case's rows equal the uninterrupted

@@ -317,8 +317,18 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
                             resumed.string() + " --threads 1 -q --checkpoint-every " + every +
                             " 2>" + killed_log;
     const int killed = std::system(cmd.c_str());
-    EXPECT_TRUE(WIFSIGNALED(killed) || (WIFEXITED(killed) && WEXITSTATUS(killed) == 128 + SIGKILL))
-        << killed << ": " << ReadText(killed_log);
+    if (kill.find(":TERM") != std::string::npos) {
+      // The controlled stop: exit 130, the case kept and reported as stopped, not failed.
+      const std::string text = ReadText(killed_log);
+      EXPECT_TRUE(WIFEXITED(killed) && WEXITSTATUS(killed) == 130) << killed << ": " << text;
+      EXPECT_NE(text.find("snow_b10 stopped after"), std::string::npos) << text;
+      EXPECT_NE(text.find("kept; the same command goes on"), std::string::npos) << text;
+      EXPECT_EQ(text.find("FAILED"), std::string::npos) << text;
+    } else {
+      EXPECT_TRUE(WIFSIGNALED(killed) ||
+                  (WIFEXITED(killed) && WEXITSTATUS(killed) == 128 + SIGKILL))
+          << killed << ": " << ReadText(killed_log);
+    }
     EXPECT_FALSE(fs::exists(resumed / "table.h5"));
     while_killed(resumed / "cases" / "snow_b10.parts",
                  sim::ReadCaseStatus((resumed / "cases" / "snow_b10.status").string()));
@@ -381,6 +391,18 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
           EXPECT_GT(point.poured, 0);
         });
     EXPECT_NE(text.find("the pour goes on from"), std::string::npos) << text;
+  }
+  {
+    SCOPED_TRACE("SIGTERM mid-pass: stopped, kept, and pass 2 goes on from its restart file");
+    const std::string text =
+        kill_and_resume("stopped_pass", "2:0.3:TERM", "0.02",
+                        [](const fs::path& parts, const sim::CaseStatus& status) {
+                          EXPECT_EQ(status.state, "stopped");
+                          EXPECT_EQ(status.passes_done, 1);
+                          EXPECT_TRUE(fs::exists(parts / "pass_2.restart.h5"));
+                        });
+    EXPECT_NE(text.find("snow_b10 goes on from"), std::string::npos) << text;
+    EXPECT_NE(text.find("(resumed at pass 2)"), std::string::npos) << text;
   }
 }
 
