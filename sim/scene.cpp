@@ -997,7 +997,8 @@ RenderSpec ParseRender(const std::string& path, const YAML::Node& node) {
     spec.width = wh[0];
     spec.height = wh[1];
   }
-  spec.every = r.Number("every", spec.every, "a number >= 0 (s; 0 = output.interval)", NonNegative);
+  spec.every = r.Number("every", spec.every,
+                        "a number >= 0 (s; 0: 0.05 in a dig, else output.interval)", NonNegative);
   return spec;
 }
 

@@ -122,7 +122,7 @@ struct RenderSpec {
   double fov_deg = 35;                           // vertical field of view [deg], in (0, 180)
   std::string color_by = "speed";                // speed | depth | material | force
   int width = 1280, height = 720;                // [px], each in [16, 4096]
-  double every = 0;                              // [s] between frames; 0 = output.interval
+  double every = 0;  // [s] between frames; 0: 0.05 s in a dig, else output.interval
 };
 // Camera presets a scene may name (render/camera.cpp frames each; a render test checks both
 // lists agree).

@@ -141,11 +141,14 @@ struct FramesArgs {
       command
           ->add_option("--every", every,
                        "Simulated seconds between frames (default: the scene's render.every, "
-                       "else output.interval)")
+                       "else 0.05 in a dig and output.interval in a plain run)")
           ->check(CLI::PositiveNumber);
     }
     command->add_flag("--video", video, "Also assemble DIR.mp4 with ffmpeg (when installed)");
-    command->add_option("--color-by", color_by, "speed|depth|material|force (default: the scene's)")
+    command
+        ->add_option("--color-by", color_by,
+                     "speed|depth|material|force (force: run --frames only, snapshots store "
+                     "no forces; default: the scene's)")
         ->check(CLI::IsMember({"speed", "depth", "material", "force"}));
     command->add_option("--color-range", color_range,
                         "LO,HI: the colour range of every frame (default: run: from the scene, "
@@ -292,7 +295,8 @@ int Main(int argc, char** argv) {
   SceneCommand balovnev_args;
   CLI::App* balovnev = add_study(
       &balovnev_args, "balovnev",
-      "The scene's dig (pass 1) against Balovnev's analytical model (FACTS.md section 7) along "
+      "The scene's dig (pass 1) against Balovnev's analytical model (../shared/FACTS.md section 7) "
+      "along "
       "the same path: OUT.h5 (the dig), OUT.balovnev.csv, a table on stdout, OUT.balovnev.png",
       "out/balovnev.h5");
   double balovnev_phi = 44, balovnev_delta = 28, balovnev_rake = 10;

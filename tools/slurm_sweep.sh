@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # A sweep as a Slurm job array: each array task runs one case (`scoopsim sweep --case I`), so a
 # sweep spreads over as many nodes as the queue gives; a resubmitted array skips the cases that are
-# done and resumes a stopped one at its last finished pass (sim/sweep.h).
+# done and resumes a stopped one from its last keep (its pour so far or its running pass, kept
+# every --checkpoint-every seconds, default 600; sim/sweep.h).
 #
 #   N=$(build/scoopsim sweep SWEEP.yaml --list | wc -l)      # the number of cases
 #   sbatch --array=0-$((N-1)) tools/slurm_sweep.sh SWEEP.yaml OUT_DIR

@@ -147,9 +147,11 @@ def main():
     parser.add_argument("--material", default="snow")
     parser.add_argument("--passes", default="", help="comma list (default: every pass of --ref)")
     parser.add_argument("--scoopsim", default="build/scoopsim")
-    parser.add_argument("--csv", default="bench/results/vm/table_accuracy_7mm.csv")
-    parser.add_argument("--png", default="/tmp/issue20_figs/table_accuracy_7mm.png")
+    parser.add_argument("--csv", default="", help="default: DIR/accuracy.csv")
+    parser.add_argument("--png", default="", help="default: DIR/accuracy.png")
     a = parser.parse_args()
+    a.csv = a.csv or os.path.join(a.dir, "accuracy.csv")
+    a.png = a.png or os.path.join(a.dir, "accuracy.png")
     if not os.path.isdir(os.path.join(a.dir, "cases")):
         fail(f"{a.dir}: not a sweep output folder (no cases/)")
     tables = {"bracket": build_table(a.scoopsim, a.dir, "bracket", [a.low, a.high])}
