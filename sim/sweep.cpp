@@ -318,6 +318,25 @@ SweepCase MakeCase(const std::string& file, const std::string& default_base, con
 
 }  // namespace
 
+namespace {
+
+// A map's keys once each (yaml-cpp keeps both of a duplicate; the scene loader refuses them too).
+// `where` is the map's dotted path ("" at the top).
+void RefuseDuplicateKeys(const std::string& path, const YAML::Node& map, const std::string& where) {
+  if (!map.IsMap()) return;
+  std::map<std::string, int> seen;  // key -> line
+  for (auto it = map.begin(); it != map.end(); ++it) {
+    const std::string key = it->first.IsScalar() ? it->first.Scalar() : YamlText(it->first);
+    const auto [first, inserted] = seen.emplace(key, LineOf(it->first));
+    if (!inserted) {
+      Fail(path, it->first, where.empty() ? key : where + "." + key, "each key once",
+           "a second '" + key + "' (the first at line " + std::to_string(first->second) + ")");
+    }
+  }
+}
+
+}  // namespace
+
 Sweep LoadSweep(const std::string& path) {
   Sweep sweep;
   sweep.path = path;
@@ -334,6 +353,7 @@ Sweep LoadSweep(const std::string& path) {
   }
   if (!root.IsMap())
     Fail(path, root, "(top level)", "a map with keys scene, grid, cases", Describe(root));
+  RefuseDuplicateKeys(path, root, "");
   for (auto it = root.begin(); it != root.end(); ++it) {
     const std::string key = it->first.as<std::string>();
     if (key != "scene" && key != "grid" && key != "cases" && key != "notes") {
@@ -353,6 +373,7 @@ Sweep LoadSweep(const std::string& path) {
     if (!grid.IsMap() || grid.size() == 0) {
       Fail(path, grid, "grid", "a non-empty map of key path: values", Describe(grid));
     }
+    RefuseDuplicateKeys(path, grid, "grid");
     std::vector<Variable> variables;
     for (auto it = grid.begin(); it != grid.end(); ++it)
       variables.push_back(ReadVariable(path, "grid", it->first, it->second));
@@ -381,6 +402,7 @@ Sweep LoadSweep(const std::string& path) {
       const YAML::Node entry = cases[i];
       const std::string where = "cases[" + std::to_string(i) + "]";
       if (!entry.IsMap()) Fail(path, entry, where, "a map with keys name, set", Describe(entry));
+      RefuseDuplicateKeys(path, entry, where);
       for (auto it = entry.begin(); it != entry.end(); ++it) {
         const std::string key = it->first.as<std::string>();
         if (key != "name" && key != "set")
@@ -392,6 +414,7 @@ Sweep LoadSweep(const std::string& path) {
         Fail(path, set ? set : entry, where + ".set", "a non-empty map of key path: value",
              Describe(set));
       }
+      RefuseDuplicateKeys(path, set, where + ".set");
       Draft d;
       for (auto it = set.begin(); it != set.end(); ++it) {
         const std::string key = it->first.as<std::string>();

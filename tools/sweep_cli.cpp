@@ -1,6 +1,12 @@
 #include "tools/sweep_cli.h"
 
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
+
+#include "sim/commands.h"
+#include "sim/scene.h"
+#include "tools/cli_checks.h"
 
 namespace tools {
 
@@ -15,7 +21,7 @@ void SweepCommands::AddTo(CLI::App* app) {
   sweep_
       ->add_option("--case", sweep_options_.only_case,
                    "Run only case I (0-based, the order of --list): one task of a job array")
-      ->check(CLI::NonNegativeNumber);
+      ->check(WholeNonNegative());
   threads_ = sweep_
                  ->add_option("--threads", sweep_options_.threads,
                               "DEM threads per case; 0 = all cores (default: the scene's "
@@ -28,7 +34,7 @@ void SweepCommands::AddTo(CLI::App* app) {
                    "stopped, so that the same command goes on from there bit for bit; 0 = never "
                    "(a stopped case then restarts its pass, or its pour)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(FiniteNonNegative("s"));
   sweep_->add_flag("--list", list_, "Print the cases (index, name, settings, cost) and exit");
   sweep_->add_flag("--no-table", no_table_, "Do not build DIR/table.h5 at the end");
   sweep_->add_flag("-q,--quiet", sweep_options_.quiet, "No progress line within a case");
@@ -41,10 +47,10 @@ void SweepCommands::AddTo(CLI::App* app) {
   build_->add_option("-o,--output", build_output_, "Table file (HDF5)")->capture_default_str();
   build_->add_option("--rho-step-mm", build_options_.rho_step_mm, "rho grid step [mm]")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(FinitePositive("mm"));
   build_->add_option("--rho-max-mm", build_options_.rho_max_mm, "rho grid end [mm]")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(FiniteNonNegative("mm"));
 
   query_ = table->add_subcommand(
       "query", "The wrench [Fx Fy Fz Tx Ty Tz] at one point (linear in bite depth and rho)");
@@ -72,8 +78,26 @@ void SweepCommands::AddTo(CLI::App* app) {
       ->check(CLI::Range(1, 17));
 }
 
+namespace {
+
+namespace fs = std::filesystem;
+
+// An output file's path must not name a folder (one line, exit 2, instead of a filesystem error).
+void RefuseFolder(const std::string& option, const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec))
+    throw sim::InputError(option + " " + path + ": expected a file to write, got a folder");
+}
+
+}  // namespace
+
 int SweepCommands::Run() {
   if (*sweep_) {
+    std::error_code ec;
+    if (fs::exists(sweep_options_.dir, ec) && !fs::is_directory(sweep_options_.dir, ec)) {
+      throw sim::InputError("-o " + sweep_options_.dir +
+                            ": expected the sweep's output folder, got a file");
+    }
     const sim::Sweep sweep = sim::LoadSweep(sweep_file_);
     if (list_) {
       std::fputs(sim::SweepCaseList(sweep).c_str(), stdout);
@@ -85,6 +109,24 @@ int SweepCommands::Run() {
     return sim::RunSweep(sweep, options);
   }
   if (*build_) {
+    RefuseFolder("-o", build_output_);
+    // The table must not land on a case file (the next build would read it as one).
+    std::error_code ec;
+    if (fs::weakly_canonical(fs::path(build_output_).parent_path(), ec) ==
+        fs::weakly_canonical(fs::path(build_dir_) / "cases", ec)) {
+      throw sim::InputError("-o " + build_output_ + ": names a file in " + build_dir_ +
+                            "/cases/, where the case files are; give another table file");
+    }
+    // Grid points: far past any pass's length is a typo, not a table.
+    const double points = build_options_.rho_max_mm / build_options_.rho_step_mm + 1;
+    if (!(points <= 1e7)) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "--rho-max-mm %g / --rho-step-mm %g: expected at most 1e7 grid points, "
+                    "got %.3g",
+                    build_options_.rho_max_mm, build_options_.rho_step_mm, points);
+      throw sim::InputError(text);
+    }
     const std::string summary = sim::BuildWrenchTable(build_dir_, build_output_, build_options_);
     std::fprintf(stderr, "scoopsim: wrote %s: %s\n", build_output_.c_str(), summary.c_str());
     return 0;
@@ -100,6 +142,8 @@ int SweepCommands::Run() {
     return 0;
   }
   if (*export_) {
+    RefuseFolder("-o", export_output_);
+    sim::RefuseOutputOverInput(export_output_, export_table_, "TABLE");
     const sim::WrenchTable table(export_table_);
     table.ExportCsv(export_output_, export_digits_);
     std::fprintf(stderr, "scoopsim: wrote %s\n", export_output_.c_str());

@@ -124,6 +124,73 @@ TEST(SweepFileTest, DuplicateCaseNamesFail) {
   EXPECT_GT(labels.line(), 0) << labels.what();
 }
 
+// Defect: a key given twice in a sweep file was taken silently (the second grid dropped, a case
+// named "0.01_0.02"); the scene loader refused them, the sweep loader did not. Now each is
+// refused at its second line.
+TEST(SweepFileTest, DuplicateKeysFail) {
+  const std::string scene = "scene: " + kSourceDir + "/scenes/sweeps/tiny_scene.yaml\n";
+  const auto error = [](const std::string& text) {
+    const fs::path path = TempDir() / "dup.yaml";
+    std::ofstream(path) << text;
+    try {
+      sim::LoadSweep(path.string());
+    } catch (const sim::InputError& e) {
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "no error for:\n" << text;
+    return std::string();
+  };
+  EXPECT_NE(error(scene + scene + "grid: {dig.passes: [1]}\n")
+                .find("dup.yaml:2: scene: expected each key once, got a second 'scene' (the first "
+                      "at line 1)"),
+            std::string::npos);
+  EXPECT_NE(error(scene + "grid: {dig.passes: [1]}\ngrid: {dig.bite_depth: [0.01]}\n")
+                .find("dup.yaml:3: grid: expected each key once"),
+            std::string::npos);
+  EXPECT_NE(error(scene + "grid: {dig.bite_depth: [0.01], dig.bite_depth: [0.02]}\n")
+                .find("dup.yaml:2: grid.dig.bite_depth: expected each key once"),
+            std::string::npos);
+  EXPECT_NE(error(scene + "cases:\n  - {name: a, set: {dig.passes: 1, dig.passes: 2}}\n")
+                .find("dup.yaml:3: cases[0].set.dig.passes: expected each key once"),
+            std::string::npos);
+}
+
+// Defect: outputs that named a file of the wrong kind were written over or failed with a
+// filesystem error (exit 1): `table export-csv T -o T` turned the table into CSV, `table build
+// DIR -o DIR/cases/x.h5` wrote over a case file, `-o` a folder, a grid of 1e15 points, `sweep -o`
+// a file. Each is now one line, exit 2, before any work, the inputs untouched.
+TEST(SweepFileTest, OutputsOfTheWrongKindAreRefused) {
+  const fs::path dir = TempDir() / "wrong_kind";
+  fs::create_directories(dir / "cases");
+  const fs::path table = dir / "t.h5";
+  std::ofstream(table) << "not a table";
+  const fs::path case_file = dir / "cases" / "a.h5";
+  std::ofstream(case_file) << "not a case";
+  const std::string log = (TempDir() / "wrong_kind.log").string();
+  const auto refused = [&](const std::string& args, const std::string& start) {
+    SCOPED_TRACE(args);
+    EXPECT_EQ(scoopsim_test::RunScoopsim(args, log), 2);
+    const std::string text = ReadText(log);
+    EXPECT_EQ(text.rfind("scoopsim: " + start, 0), 0u) << text;
+    EXPECT_EQ(text.find('\n'), text.size() - 1) << text;
+  };
+  refused("table export-csv " + table.string() + " -o " + table.string(),
+          table.string() + ": -o names the run's own input (TABLE = ");
+  refused("table export-csv " + table.string() + " -o " + dir.string(),
+          "-o " + dir.string() + ": expected a file to write, got a folder");
+  refused("table build " + dir.string() + " -o " + case_file.string(),
+          "-o " + case_file.string() + ": names a file in " + dir.string() + "/cases/");
+  refused("table build " + dir.string() + " -o " + (dir / "t2.h5").string() +
+              " --rho-max-mm 1e12 --rho-step-mm 1e-3",
+          "--rho-max-mm 1e+12 / --rho-step-mm 0.001: expected at most 1e7 grid points");
+  refused("sweep " + kTiny + " -o " + table.string(),
+          "-o " + table.string() + ": expected the sweep's output folder, got a file");
+  refused("sweep " + kTiny + " --checkpoint-every nan -o " + dir.string(),
+          "--checkpoint-every: expected a finite number >= 0 (s), got nan");
+  EXPECT_EQ(ReadText(table), "not a table");
+  EXPECT_EQ(ReadText(case_file), "not a case");
+}
+
 // Bad sweep files exit 2 with one line naming the file and line.
 TEST(SweepFileTest, CommandLineExitsTwo) {
   const std::string sweep = WriteSweep("cli_bad.yaml", "grid:\n  bed.nope: [1]\n");
