@@ -59,7 +59,12 @@ struct JointPlan {
 
 }  // namespace
 
+// Farther out of reach than this the scoop cannot follow the dig at all: bad input, not a run.
+constexpr double kReachTolerance = 0.05;  // [m] of IK position error
+
 struct ArmDriver::Impl {
+  std::string scene_path;
+  bool announce = true;  // the plan's notes on stderr (slowed, out of reach)
   ArmSpec spec;
   std::vector<ObstacleSpec> obstacles;
   dem::Vec3 gravity;
@@ -112,7 +117,8 @@ struct ArmDriver::Impl {
   int64_t track_n = 0;
 
   Impl(const Scene& scene)
-      : spec(scene.arm),
+      : scene_path(scene.path),
+        spec(scene.arm),
         obstacles(scene.obstacles),
         gravity(scene.gravity),
         dt(scene.time_step),
@@ -197,12 +203,20 @@ struct ArmDriver::Impl {
     p.ik_error = jp.max_position_error;
     report.time_scale = std::max(report.time_scale, p.scale);
     report.ik_error_max = std::max(report.ik_error_max, p.ik_error);
-    if (p.scale > 1)
+    if (p.ik_error > kReachTolerance) {
+      char text[200];
+      std::snprintf(text, sizeof text,
+                    ": arm.base: expected the dig's path within the arm's reach (IK error at "
+                    "most %.0f mm), got pass %d up to %.4g mm out of it; move arm.base or the path",
+                    1e3 * kReachTolerance, pass, 1e3 * p.ik_error);
+      throw InputError(scene_path + text);
+    }
+    if (announce && p.scale > 1)
       Status(
           "scoopsim: arm: pass %d: the path asks up to %.3g x the joint velocity limits "
           "(margin %.2g): slowed by %.3g, %.4g s -> %.4g s\n",
           pass, p.scale * spec.velocity_margin, spec.velocity_margin, p.scale, d, p.duration);
-    if (p.ik_error > 1e-3)
+    if (announce && p.ik_error > 1e-3)
       Status(
           "scoopsim: arm: pass %d: the path is out of the arm's reach by up to %.3g mm (IK); "
           "move arm.base or the path\n",
@@ -427,10 +441,11 @@ struct ArmDriver::Impl {
   }
 };
 
-ArmDriver::ArmDriver(const Scene& scene) {
+ArmDriver::ArmDriver(const Scene& scene, bool announce) {
   if (!scene.arm.enabled || !scene.arm.model || !scene.dig.enabled)
     throw std::invalid_argument("ArmDriver: the scene needs an arm: block and a dig: block");
   impl_ = std::make_unique<Impl>(scene);
+  impl_->announce = announce;
 }
 
 ArmDriver::~ArmDriver() = default;

@@ -70,8 +70,10 @@ struct ArmReport {
 
 class ArmDriver : public ScoopDriver {
  public:
-  // scene.arm.enabled and scene.dig.enabled (std::invalid_argument otherwise).
-  explicit ArmDriver(const Scene& scene);
+  // scene.arm.enabled and scene.dig.enabled (std::invalid_argument otherwise). `announce`: the
+  // pass plans' notes on stderr (slowed to the velocity limits, slightly out of reach). A pass
+  // path more than 50 mm out of reach throws InputError naming arm.base when it is planned.
+  explicit ArmDriver(const Scene& scene, bool announce = true);
   ~ArmDriver() override;
 
   PassStart BeginPass(int pass, const BedContext& bed) override;

@@ -90,7 +90,7 @@ int RunBalovnevStudy(const Scene& scene_in, const BalovnevStudyOptions& options)
            scene.dig.passes);
     scene.dig.passes = 1;
   }
-  RefuseOutputOverInput(options.output, scene.bed.file, scene.path + ": bed.file");
+  RefuseOutputOverScene(options.output, scene);
   const std::string csv_path = BalovnevCsvPath(options.output);
   CheckWritable(csv_path);
 

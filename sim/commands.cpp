@@ -100,8 +100,19 @@ void RefuseOutputOverInput(const std::string& output, const std::string& input,
   }
 }
 
+void RefuseOutputOverScene(const std::string& output, const Scene& scene, bool bed_file) {
+  RefuseOutputOverInput(output, scene.path, "the scene");
+  RefuseOutputOverInput(output, scene.materials_path, scene.path + ": materials");
+  if (scene.dig.enabled)
+    RefuseOutputOverInput(output, scene.dig.scoop.mesh, scene.path + ": dig.scoop.mesh");
+  if (scene.arm.enabled) RefuseOutputOverInput(output, scene.arm.urdf, scene.path + ": arm.urdf");
+  if (bed_file) RefuseOutputOverInput(output, scene.bed.file, scene.path + ": bed.file");
+}
+
 int MakeBed(const Scene& scene, const RunOptions& options) {
   InstallStopHandlers();
+  // (`bed` may write the scene's own bed.file: the scene that loads the bed it makes.)
+  RefuseOutputOverScene(options.output, scene, /*bed_file=*/false);
   // The output's folder is made and checked for writing before any work.
   CheckWritable(options.output);
   World world(scene, options.threads);
@@ -124,11 +135,11 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
 
 int RunScene(const Scene& scene, const RunOptions& options) {
   // The arm on a wrench table: no bed, no DEM (sim/table_arm.h).
+  RefuseOutputOverScene(options.output, scene);
   if (scene.arm.table_driven) return RunTableArm(scene, options).exit_status;
   InstallStopHandlers();
-  // The output first, before any work: refused when it is the run's own input bed or another
-  // process writes it (locked from here to the end).
-  RefuseOutputOverInput(options.output, scene.bed.file, scene.path + ": bed.file");
+  // The output first, before any work: refused when it is one of the run's inputs (above) or
+  // another process writes it (locked from here to the end).
   const bool checkpoints = options.checkpoint_every > 0 || options.resume;
   if (checkpoints && scene.arm.enabled) {
     throw InputError(scene.path +

@@ -41,6 +41,9 @@ void CheckWritable(const std::string& path);
 // is): a run must not overwrite its own input. `what` names the input ("scenes/x.yaml: bed.file").
 void RefuseOutputOverInput(const std::string& output, const std::string& input,
                            const std::string& what);
+// The same for every file a scene reads: the scene, its materials file, the scoop mesh, the
+// arm's URDF and (with `bed_file`) bed.file.
+void RefuseOutputOverScene(const std::string& output, const Scene& scene, bool bed_file = true);
 
 // Runs /usr/bin/python3 <source>/tools/<script> with `args` (each quoted for the shell), as the
 // studies draw their figures; false (and a line on stderr naming the command) when it fails.

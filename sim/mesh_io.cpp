@@ -135,6 +135,31 @@ dem::TriangleMesh LoadMesh(const std::string& path, double scale) {
       Fail(path, "a mesh whose vertices have finite coordinates", got.str());
     }
   }
+  // Zero-area triangles (coincident or collinear corners): a broken export, whose contacts
+  // would meet edges where the surface should be. Zero relative to the mesh's own size.
+  dem::Vec3 lo = mesh.vertices.front(), hi = lo;
+  for (const dem::Vec3& v : mesh.vertices) {
+    lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
+    hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+  }
+  // Edges in units of the box's diagonal (an overflowing size is the scale check's to refuse).
+  const double size = std::sqrt(dem::Dot(hi - lo, hi - lo));
+  const double inv = std::isfinite(size) && size > 0 ? 1 / size : 0;
+  size_t degenerate = size == 0 ? mesh.triangles.size() : 0, first = 0;
+  for (size_t t = 0; inv > 0 && t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    const dem::Vec3 a = mesh.vertices[tri[0]], b = mesh.vertices[tri[1]], c = mesh.vertices[tri[2]];
+    const dem::Vec3 n = dem::Cross((b - a) * inv, (c - a) * inv);
+    if (!(dem::Dot(n, n) > 1e-24)) {
+      if (degenerate++ == 0) first = t;
+    }
+  }
+  if (degenerate > 0) {
+    std::ostringstream got;
+    got << degenerate << " of " << mesh.triangles.size()
+        << " triangles with zero area (the first: triangle " << first << ")";
+    Fail(path, "a mesh whose triangles have non-zero area", got.str());
+  }
   return mesh;
 }
 

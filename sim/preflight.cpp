@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dem/material.h"
+#include "sim/arm_driver.h"
 #include "sim/bed.h"
 #include "sim/bed_io.h"
 #include "sim/dig.h"
@@ -91,6 +92,17 @@ FileBed CheckBedFile(Scene* scene) {
   // the run that poured the bed, so a run from the saved bed replays it bit for bit.
   std::vector<bool> used(static_cast<size_t>(scene->materials.size()), false);
   for (int32_t m : p.material) used[static_cast<size_t>(m)] = true;
+  // The file's particles are of bed.material: a scene (or a sweep's case) that names another
+  // would run the file's material under its own name.
+  const int declared = scene->materials.Find(bed.material);
+  for (size_t m = 0; m < used.size(); ++m) {
+    if (used[m] && static_cast<int>(m) != declared) {
+      Refuse(*scene, "bed.material",
+             "the material of bed.file " + bed.file + "'s particles (" +
+                 scene->materials[static_cast<int>(m)].name + ")",
+             bed.material, "a bed file's particles keep the material they were poured with");
+    }
+  }
   f.time_step = scene->time_step;
   for (size_t m = 0; m < used.size(); ++m) {
     if (!used[m]) continue;
@@ -223,6 +235,12 @@ RunForecast Preflight(Scene* scene, Work work) {
       const std::unique_ptr<KinematicDriver> driver = KinematicDriver::ForDig(scene->dig);
       for (int pass = 1; pass <= scene->dig.passes; ++pass)
         f.simulated += driver->PlannedDuration(pass, context);
+      // The arm's plan of each pass (IK): a path out of its reach is refused here, before any
+      // work (ArmDriver throws InputError naming arm.base).
+      if (scene->arm.enabled && !scene->arm.table_driven && scene->arm.model) {
+        ArmDriver arm(*scene, /*announce=*/false);
+        for (int pass = 1; pass <= scene->dig.passes; ++pass) arm.PlannedDuration(pass, context);
+      }
       time_key = "dig";
     } else {
       f.simulated += scene->duration;

@@ -562,7 +562,14 @@ RunResult World::Run(const RunControl& control) {
   auto maybe_frame = [&] {
     if (!control.on_frame || system.time() < next_frame - slack) return;
     control.on_frame(View());
-    while (next_frame <= system.time() + slack) next_frame += frame_every;
+    while (next_frame <= system.time() + slack) {
+      const double after = next_frame + frame_every;
+      if (!(after > next_frame)) {  // a spacing below the clock's resolution: every step
+        next_frame = system.time() + slack + scene_.time_step;
+        break;
+      }
+      next_frame = after;
+    }
   };
   maybe_frame();
 

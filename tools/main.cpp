@@ -43,6 +43,7 @@
 #include "sim/saved_run.h"
 #include "sim/scene.h"
 #include "tools/arm_info.h"
+#include "tools/cli_checks.h"
 #include "tools/sweep_cli.h"
 
 namespace {
@@ -60,17 +61,6 @@ std::string OneLine(std::string message) {
 }
 
 // A number > 0 that is finite: CLI11's PositiveNumber lets "nan" and "inf" through.
-CLI::Validator FinitePositive() {
-  return CLI::Validator(
-      [](std::string& text) -> std::string {
-        double v = 0;
-        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || !(v > 0))
-          return "expected a finite number > 0 (s), got " + text;
-        return "";
-      },
-      "NUMBER > 0");
-}
-
 // Options shared by `bed` and `run`.
 struct SceneCommand {
   std::string scene;
@@ -142,7 +132,7 @@ struct FramesArgs {
           ->add_option("--every", every,
                        "Simulated seconds between frames (default: the scene's render.every, "
                        "else 0.05 in a dig and output.interval in a plain run)")
-          ->check(CLI::PositiveNumber);
+          ->check(tools::FinitePositive("s"));
     }
     command->add_flag("--video", video, "Also assemble DIR.mp4 with ffmpeg (when installed)");
     command
@@ -162,6 +152,9 @@ struct FramesArgs {
 
   // Options from the scene's render block with the command line's overrides.
   render::FrameOptions Options(const sim::RenderSpec& spec, int threads) const {
+    std::error_code ec;
+    if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
+      throw sim::InputError("--frames " + dir + ": expected a folder for the frames, got a file");
     sim::RenderSpec s = spec;
     if (!color_by.empty()) s.color_by = color_by;
     if (!camera.empty()) s.camera_preset = camera;
@@ -230,12 +223,12 @@ int Main(int argc, char** argv) {
   run->add_option("--stop-after", run_stop_after,
                   "Stop after this many simulated seconds, the output closed as on SIGINT "
                   "(default: at the scene's end)")
-      ->check(FinitePositive());
+      ->check(tools::FinitePositive("s"));
   double run_checkpoint_every = 0;
   run->add_option("--checkpoint-every", run_checkpoint_every,
                   "Keep the run's whole state in OUT.restart.h5 every this many seconds of wall "
                   "time (and when stopped by a signal); removed when the run ends")
-      ->check(FinitePositive());
+      ->check(tools::FinitePositive("s"));
   std::string run_resume;
   run->add_option("--resume", run_resume,
                   "Go on from OUT.restart.h5 of this output (SCENE, if given, must be the one it "
@@ -338,7 +331,7 @@ int Main(int argc, char** argv) {
       ->capture_default_str();
   size->add_option("--case", size_options.only_case,
                    "Run only case I (0-based, the order of --list): one task of a job array")
-      ->check(CLI::NonNegativeNumber);
+      ->check(tools::WholeNonNegative());
   size->add_option("--threads", size_options.threads,
                    "DEM threads per case; 0 = all cores (default: the scene's `threads` when "
                    "plain, 1 per rank under mpirun)")
@@ -353,7 +346,7 @@ int Main(int argc, char** argv) {
                    "seconds of wall time and when stopped, so that the same command goes on "
                    "from there bit for bit; 0 = never")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(tools::FiniteNonNegative("s"));
   size->add_flag("--list", size_options.list,
                  "Print the cases (index, name, settings, cost) and exit");
   size->add_flag("--no-plot", size_no_plot, "Do not draw DIR/size_*.png");
@@ -427,7 +420,7 @@ int Main(int argc, char** argv) {
   arm_info->add_option("URDF", arm_urdf, "The arm's URDF, e.g. assets/lander_arm.urdf")->required();
   arm_info->add_option("--gravity", arm_gravity, "Gravity [m/s^2] along -z of the base link")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(tools::FiniteNonNegative("m/s^2"));
 
   try {
     app.parse(argc, argv);
@@ -476,6 +469,16 @@ int Main(int argc, char** argv) {
         frames = std::make_unique<render::FrameSequence>(frame_options);
         options.on_frame = [&frames](const sim::WorldView& view) { frames->Add(view); };
         options.frame_every = run_frames.every > 0 ? run_frames.every : scene.render.every;
+        // At most a frame a step: a spacing below the time step is a typo (1e-300 for 1e-3).
+        if (options.frame_every > 0 && options.frame_every < scene.time_step) {
+          char text[96];
+          std::snprintf(text, sizeof text,
+                        ": expected at least the time step (%.6g s) between frames, got %.6g",
+                        scene.time_step, options.frame_every);
+          throw sim::InputError(
+              (run_frames.every > 0 ? std::string("--every") : scene.path + ": render.every") +
+              text);
+        }
       }
       const int status = sim::RunScene(scene, options);
       if (frames) {

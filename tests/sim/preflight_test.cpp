@@ -276,6 +276,136 @@ TEST(PreflightTest, ShippedScenesPass) {
   EXPECT_GT(checked, 10);
 }
 
+// Defect: bed.material was ignored when bed.file was set (a sweep's grid over bed.material on
+// one bed file ran snow under the name ice, exit 0). A scene whose bed.material is not that of
+// the file's particles is now refused.
+TEST(PreflightTest, BedMaterialThatDisagreesWithTheBedFileIsRefused) {
+  Bed("m.h5");
+  const InputError e = Refusal(WriteScene("m_ice.yaml", "m.h5", "material: snow", "material: ice"));
+  EXPECT_EQ(e.key(), "bed.material") << e.what();
+  EXPECT_EQ(e.line(), 7) << e.what();
+  EXPECT_NE(std::string(e.what()).find("particles (snow), got ice"), std::string::npos) << e.what();
+}
+
+// Defect: a scoop mesh of zero-area triangles (coincident corners) was accepted and dug with
+// (its edges met the grains: peak |F| 4.7 N against 28.8 N for the real mesh). A mesh with any
+// zero-area triangle is now refused at load, naming the count and the first.
+TEST(PreflightTest, MeshWithZeroAreaTrianglesIsRefused) {
+  const fs::path stl = Dir() / "degenerate.stl";
+  std::ofstream(stl) << "solid s\n"
+                        "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\n"
+                        "vertex 0 0.1 0\nendloop\nendfacet\n"
+                        "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\n"
+                        "vertex 0.2 0 0\nendloop\nendfacet\n"
+                        "endsolid s\n";
+  const std::string scene = WriteScene(
+      "degenerate.yaml", "", std::string(SCOOPSIM_SOURCE_DIR) + "/assets/scoop.stl", stl.string());
+  try {
+    LoadScene(scene);
+    ADD_FAILURE() << "accepted: " << scene;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "dig.scoop.mesh") << e.what();
+    EXPECT_NE(std::string(e.what()).find("got 1 of 2 triangles with zero area (the first: "
+                                         "triangle 1)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Defect: `-o` could name the run's own scene, materials file or mesh: each was overwritten
+// with HDF5, exit 0. Each is now refused before any work, and the file is left as it was.
+TEST(PreflightTest, OutputOverTheScenesOwnFilesIsRefused) {
+  const fs::path materials = Dir() / "own_materials.yaml";
+  fs::copy_file(fs::path(SCOOPSIM_SOURCE_DIR) / "scenes" / "materials.yaml", materials,
+                fs::copy_options::overwrite_existing);
+  const fs::path mesh = Dir() / "own_scoop.stl";
+  fs::copy_file(fs::path(SCOOPSIM_SOURCE_DIR) / "assets" / "scoop.stl", mesh,
+                fs::copy_options::overwrite_existing);
+  std::string text = DigSceneText("");
+  const std::string source = SCOOPSIM_SOURCE_DIR;
+  text.replace(text.find(source + "/scenes/materials.yaml"),
+               (source + "/scenes/materials.yaml").size(), materials.string());
+  text.replace(text.find(source + "/assets/scoop.stl"), (source + "/assets/scoop.stl").size(),
+               mesh.string());
+  const fs::path scene = Dir() / "own.yaml";
+  WriteText(scene, text);
+  for (const auto& [output, what] : {std::pair<fs::path, std::string>{scene, "the scene"},
+                                     {materials, scene.string() + ": materials"},
+                                     {mesh, scene.string() + ": dig.scoop.mesh"}}) {
+    SCOPED_TRACE(output.string());
+    const auto size = fs::file_size(output);
+    for (const char* command : {"run ", "bed "}) {
+      int status = -1;
+      const std::string err = Stderr(command + scene.string() + " -o " + output.string(), &status);
+      EXPECT_EQ(status, 2) << err;
+      EXPECT_EQ(err, "scoopsim: " + output.string() + ": -o names the run's own input (" + what +
+                         " = " + output.string() + "); give another output file\n");
+      EXPECT_EQ(fs::file_size(output), size);
+    }
+  }
+}
+
+// Defect: `run --frames D --every 1e-300` (or render.every: 1e-300) spun for ever, deaf to
+// SIGTERM: the next frame's time never advanced. A spacing below the time step, or not a
+// finite number > 0, is now refused before any work.
+TEST(PreflightTest, FrameSpacingBelowTheTimeStepIsRefused) {
+  Bed("f.h5");
+  const std::string scene = WriteScene("frames.yaml", "f.h5");
+  const std::string frames = (Dir() / "frames").string();
+  int status = -1;
+  std::string err = Stderr("run " + scene + " -o " + (Dir() / "f_out.h5").string() + " --frames " +
+                               frames + " --every 1e-300 --stop-after 0.001",
+                           &status);
+  EXPECT_EQ(status, 2) << err;
+  EXPECT_EQ(err.rfind("scoopsim: --every: expected at least the time step (", 0), 0u) << err;
+  EXPECT_EQ(err.find('\n'), err.size() - 1) << err;
+  err = Stderr("run " + scene + " -o " + (Dir() / "f_out.h5").string() + " --frames " + frames +
+                   " --every nan --stop-after 0.001",
+               &status);
+  EXPECT_EQ(status, 2) << err;
+  EXPECT_EQ(err.rfind("scoopsim: --every: expected a finite number > 0 (s), got nan", 0), 0u)
+      << err;
+  const std::string in_scene = WriteScene("frames_scene.yaml", "f.h5", "sleep: {enabled: true}\n",
+                                          "sleep: {enabled: true}\nrender: {every: 1.0e-300}\n");
+  err = Stderr("run " + in_scene + " -o " + (Dir() / "f_out.h5").string() + " --frames " + frames +
+                   " --stop-after 0.001",
+               &status);
+  EXPECT_EQ(status, 2) << err;
+  EXPECT_EQ(
+      err.rfind("scoopsim: " + in_scene + ": render.every: expected at least the time step", 0), 0u)
+      << err;
+}
+
+// Defect: a dig path 100 m out of the arm's reach passed `check` and ran to exit 0 with no
+// wrench ("no fault"). A path more than 50 mm out of reach is now refused by the preflight,
+// naming arm.base.
+TEST(PreflightTest, ArmPathOutOfReachIsRefused) {
+  const fs::path source = SCOOPSIM_SOURCE_DIR;
+  std::ifstream in(source / "scenes" / "arm" / "nominal_snow.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto replace = [&text](const std::string& from, const std::string& to) {
+    const size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  };
+  replace("../materials.yaml", (source / "scenes" / "materials.yaml").string());
+  replace("../../assets/scoop.stl", (source / "assets" / "scoop.stl").string());
+  replace("urdf: ../../assets/lander_arm.urdf",
+          "urdf: " + (source / "assets" / "lander_arm.urdf").string());
+  const fs::path near = Dir() / "arm_near.yaml";
+  WriteText(near, text);
+  Scene good = LoadScene(near.string());
+  EXPECT_NO_THROW(Preflight(&good, Work::kRun));
+  replace("faults:", "base: {reach: [100, 0.175], height: 0.172}\n  faults:");
+  const fs::path far = Dir() / "arm_far.yaml";
+  WriteText(far, text);
+  const InputError e = Refusal(far.string());
+  EXPECT_NE(std::string(e.what()).find(far.string() + ": arm.base: expected the dig's path within "
+                                                      "the arm's reach"),
+            std::string::npos)
+      << e.what();
+}
+
 // Diagnostics never print non-physical times: the progress clock of a run planned for 1e299 s
 // read "ETA -153722867280912930:-8".
 TEST(PreflightTest, ProgressClockPrintsOnlyPhysicalTimes) {
