@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -61,6 +62,11 @@ struct FileBed {
 // radii checked against the scene's; its surface and top measured.
 FileBed CheckBedFile(Scene* scene) {
   BedSpec& bed = scene->bed;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(bed.file, ec)) {
+    Refuse(*scene, "bed.file", "an existing bed file (made by `scoopsim bed SCENE -o FILE`)",
+           bed.file, "no such file");
+  }
   dem::System system(scene->materials, MakeSystemConfig(*scene));
   LoadBed(bed.file, &system);
   const dem::Particles& p = system.particles();

@@ -340,6 +340,9 @@ void RefuseDuplicateKeys(const std::string& path, const YAML::Node& map, const s
 Sweep LoadSweep(const std::string& path) {
   Sweep sweep;
   sweep.path = path;
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(path + ": expected a sweep file (YAML), got a folder");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open sweep file");
   std::stringstream buffer;

@@ -276,6 +276,16 @@ TEST(PreflightTest, ShippedScenesPass) {
   EXPECT_GT(checked, 10);
 }
 
+// A bed.file that does not exist is refused naming the scene, its line and the key (it named
+// only the bed file).
+TEST(PreflightTest, MissingBedFileNamesTheSceneAndKey) {
+  const InputError e = Refusal(WriteScene("nobed.yaml", "no_such_bed.h5"));
+  EXPECT_EQ(e.key(), "bed.file") << e.what();
+  EXPECT_EQ(e.line(), 10) << e.what();
+  EXPECT_NE(std::string(e.what()).find("no_such_bed.h5 (no such file)"), std::string::npos)
+      << e.what();
+}
+
 // Defect: bed.material was ignored when bed.file was set (a sweep's grid over bed.material on
 // one bed file ran snow under the name ice, exit 0). A scene whose bed.material is not that of
 // the file's particles is now refused.

@@ -185,6 +185,7 @@ TEST(SweepFileTest, OutputsOfTheWrongKindAreRefused) {
           "--rho-max-mm 1e+12 / --rho-step-mm 0.001: expected at most 1e7 grid points");
   refused("sweep " + kTiny + " -o " + table.string(),
           "-o " + table.string() + ": expected the sweep's output folder, got a file");
+  refused("sweep " + dir.string(), dir.string() + ": expected a sweep file (YAML), got a folder");
   refused("sweep " + kTiny + " --checkpoint-every nan -o " + dir.string(),
           "--checkpoint-every: expected a finite number >= 0 (s), got nan");
   EXPECT_EQ(ReadText(table), "not a table");
