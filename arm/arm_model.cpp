@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -61,12 +62,18 @@ class CaptureHandler : public console_bridge::OutputHandler {
 };
 
 // 1-based line of the first `<tag ... name="name"` in the text, or 0.
-int LineOf(const std::string& text, const std::string& tag, const std::string& name) {
+// `text` with the regex metacharacters escaped.
+std::string RegexEscape(const std::string& text) {
   std::string escaped;
-  for (char c : name) {
+  for (char c : text) {
     if (std::strchr(".^$|()[]{}*+?\\", c)) escaped += '\\';
     escaped += c;
   }
+  return escaped;
+}
+
+int LineOf(const std::string& text, const std::string& tag, const std::string& name) {
+  const std::string escaped = RegexEscape(name);
   const std::regex pattern("<\\s*" + tag + "\\b[^>]*\\bname\\s*=\\s*[\"']" + escaped + "[\"']");
   std::smatch match;
   if (!std::regex_search(text, match, pattern)) return 0;
@@ -89,6 +96,22 @@ class Reporter {
   }
   int Line(const std::string& tag, const std::string& name) const {
     return LineOf(text_, tag, name);
+  }
+  // The text of attribute `attr` of the first <child> inside <link name="link">, as written
+  // ("" when there is none): urdfdom reads a value it cannot parse as 0.
+  std::string Raw(const std::string& link, const std::string& child,
+                  const std::string& attr) const {
+    std::smatch start;
+    const std::regex open("<\\s*link\\b[^>]*\\bname\\s*=\\s*[\"']" + RegexEscape(link) + "[\"']");
+    if (!std::regex_search(text_, start, open)) return "";
+    const size_t from = static_cast<size_t>(start.position(0));
+    const size_t to = text_.find("</link>", from);
+    const std::string body =
+        text_.substr(from, to == std::string::npos ? std::string::npos : to - from);
+    std::smatch value;
+    const std::regex pattern("<\\s*" + child + "\\b[^>]*\\b" + attr +
+                             "\\s*=\\s*[\"']([^\"']*)[\"']");
+    return std::regex_search(body, value, pattern) ? value[1].str() : "";
   }
 
  private:
@@ -128,6 +151,23 @@ Inertial LinkInertial(const urdf::Inertial& in) {
 // Checks a link's inertial: finite, mass > 0, inertia symmetric positive definite with principal
 // moments obeying the triangle inequality (a real body's do).
 void CheckInertial(const Reporter& report, const std::string& link, const urdf::Inertial& in) {
+  // Values as written first: urdfdom reads "abc" (or "") as 0, which the checks below would
+  // report as "got 0".
+  const std::pair<const char*, const char*> written[] = {
+      {"mass", "value"},  {"inertia", "ixx"}, {"inertia", "ixy"}, {"inertia", "ixz"},
+      {"inertia", "iyy"}, {"inertia", "iyz"}, {"inertia", "izz"}};
+  for (const auto& [child, attr] : written) {
+    std::string raw = report.Raw(link, child, attr);
+    raw.erase(0, raw.find_first_not_of(" \t\n"));
+    raw.erase(raw.find_last_not_of(" \t\n") + 1);
+    if (raw.empty()) continue;
+    char* end = nullptr;
+    std::strtod(raw.c_str(), &end);
+    if (end == raw.c_str() || *end != '\0') {
+      report.Fail("link", link, "link '" + link + "' <" + child + " " + attr + ">",
+                  "expected a number, got '" + raw + "'");
+    }
+  }
   const double values[] = {in.mass, in.ixx, in.ixy, in.ixz, in.iyy, in.iyz, in.izz};
   for (double v : values) {
     if (!std::isfinite(v)) {

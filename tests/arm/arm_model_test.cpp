@@ -176,6 +176,14 @@ TEST(ArmModelTest, NegativeMass) {
       "<link name=\"l_dist\">", "link 'l_dist' <mass>: expected a mass > 0 kg, got -7.67831");
 }
 
+// Defect: urdfdom reads a value it cannot parse as 0, so <mass value="abc"/> was reported as
+// "got 0". The value is now reported as written.
+TEST(ArmModelTest, MassThatIsNotANumber) {
+  ExpectLoadError("mass_abc.urdf", Edited("<mass value=\"7.67831\"/>", "<mass value=\"abc\"/>"),
+                  "<link name=\"l_dist\">",
+                  "link 'l_dist' <mass value>: expected a number, got 'abc'");
+}
+
 TEST(ArmModelTest, InertiaNotPositiveDefinite) {
   ExpectLoadError("bad_inertia.urdf", Edited("ixx=\"0.013575\"", "ixx=\"-0.013575\""),
                   "<link name=\"l_wrist\">",
