@@ -52,12 +52,40 @@ using sim::kExitFailure;
 using sim::kExitInput;
 constexpr int kMaxThreads = 4096;  // same bound as the scene's `threads`
 
-// Messages are printed on one line, whatever they contain.
-std::string OneLine(std::string message) {
-  for (char& c : message) {
-    if (c == '\n' || c == '\r') c = ' ';
+// Messages are printed on one line of text, whatever they contain (a binary file's bytes, quoted
+// back, included): line breaks become spaces, other control bytes and bytes that are not UTF-8
+// become \xNN.
+std::string OneLine(const std::string& message) {
+  std::string out;
+  const auto* b = reinterpret_cast<const unsigned char*>(message.data());
+  const size_t n = message.size();
+  for (size_t i = 0; i < n;) {
+    const unsigned char c = b[i];
+    // Length of a well-formed UTF-8 sequence starting here (1 for ASCII), or 0.
+    size_t len = c < 0x80           ? 1
+                 : (c >> 5) == 0x6  ? 2
+                 : (c >> 4) == 0xE  ? 3
+                 : (c >> 3) == 0x1E ? 4
+                                    : 0;
+    if (c >= 0x80 && c < 0xC2) len = 0;  // a continuation byte, or an overlong lead
+    if (len > 1) {
+      if (i + len > n) len = 0;
+      for (size_t k = 1; k < len; ++k)
+        if ((b[i + k] >> 6) != 0x2) len = 0;
+    }
+    if (c == '\n' || c == '\r') {
+      out += ' ';
+    } else if (len == 0 || (len == 1 && (c < 0x20 || c == 0x7F) && c != '\t')) {
+      char hex[5];
+      std::snprintf(hex, sizeof hex, "\\x%02X", c);
+      out += hex;
+      len = 1;
+    } else {
+      out.append(message, i, len);
+    }
+    i += len;
   }
-  return message;
+  return out;
 }
 
 // A number > 0 that is finite: CLI11's PositiveNumber lets "nan" and "inf" through.

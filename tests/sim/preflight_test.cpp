@@ -286,6 +286,19 @@ TEST(PreflightTest, MissingBedFileNamesTheSceneAndKey) {
       << e.what();
 }
 
+// Defect: a scene's stray binary bytes were quoted back raw into the one-line message (a
+// terminal showed garbage; a log got invalid UTF-8). They are now written as \xNN.
+TEST(PreflightTest, BinaryBytesInAMessageAreEscaped) {
+  const fs::path scene = Dir() / "binary.yaml";
+  WriteText(scene, std::string("materials: \xFF\xFE\x01junk\n"));
+  int status = -1;
+  const std::string err = Stderr("check " + scene.string(), &status);
+  EXPECT_EQ(status, 2) << err;
+  EXPECT_NE(err.find("got \\xFF\\xFE\\x01junk"), std::string::npos) << err;
+  EXPECT_EQ(err.find('\xFF'), std::string::npos) << err;
+  EXPECT_EQ(err.find('\n'), err.size() - 1) << err;
+}
+
 // Defect: bed.material was ignored when bed.file was set (a sweep's grid over bed.material on
 // one bed file ran snow under the name ice, exit 0). A scene whose bed.material is not that of
 // the file's particles is now refused.
