@@ -3,11 +3,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "dem/material.h"
@@ -57,6 +59,73 @@ struct FileBed {
   double surface = 0;                     // as World::StartDig measures it [m]
   double top = 0;                         // highest particle top [m]
 };
+
+// The deepest overlap between two spheres of different bodies (clump members among themselves
+// excepted) as a fraction of the smaller diameter, and the pair's indices; cells of the largest
+// diameter, sorted, so a large bed takes a second at most.
+struct DeepestOverlap {
+  double fraction = 0;
+  size_t a = 0, b = 0;
+};
+DeepestOverlap FindDeepestOverlap(const dem::System& system) {
+  const dem::Particles& p = system.particles();
+  const size_t n = p.size();
+  DeepestOverlap deepest;
+  if (n < 2) return deepest;
+  // The body of each sphere: its clump, or itself.
+  std::vector<int64_t> body(n);
+  std::unordered_map<int64_t, size_t> index;
+  for (size_t k = 0; k < n; ++k) {
+    body[k] = -1 - static_cast<int64_t>(k);
+    index.emplace(p.id[k], k);
+  }
+  const dem::Clumps& clumps = system.clumps();
+  for (size_t c = 0; c < clumps.size(); ++c) {
+    for (int32_t m = clumps.first[c]; m < clumps.first[c + 1]; ++m) {
+      const auto it = index.find(clumps.member[static_cast<size_t>(m)]);
+      if (it != index.end()) body[it->second] = static_cast<int64_t>(c);
+    }
+  }
+  const double r_max = *std::max_element(p.radius.begin(), p.radius.end());
+  dem::Vec3 lo = p.x[0];
+  for (const dem::Vec3& x : p.x)
+    lo = {std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
+  const double cell = 2 * r_max;
+  const auto cell_of = [&](const dem::Vec3& x) {
+    return std::array<int64_t, 3>{static_cast<int64_t>((x.x - lo.x) / cell),
+                                  static_cast<int64_t>((x.y - lo.y) / cell),
+                                  static_cast<int64_t>((x.z - lo.z) / cell)};
+  };
+  const auto key = [](int64_t i, int64_t j, int64_t k) {
+    return (i * 1048576 + j) * 1048576 + k;  // cells < 2^20 a side: beds of a metre at 1 um
+  };
+  std::vector<std::pair<int64_t, size_t>> sorted(n);
+  for (size_t k = 0; k < n; ++k) {
+    const auto c = cell_of(p.x[k]);
+    sorted[k] = {key(c[0], c[1], c[2]), k};
+  }
+  std::sort(sorted.begin(), sorted.end());
+  for (size_t k = 0; k < n; ++k) {
+    const auto c = cell_of(p.x[k]);
+    for (int64_t di = -1; di <= 1; ++di)
+      for (int64_t dj = -1; dj <= 1; ++dj)
+        for (int64_t dk = -1; dk <= 1; ++dk) {
+          if (c[0] + di < 0 || c[1] + dj < 0 || c[2] + dk < 0) continue;
+          const int64_t want = key(c[0] + di, c[1] + dj, c[2] + dk);
+          auto it =
+              std::lower_bound(sorted.begin(), sorted.end(), std::pair<int64_t, size_t>{want, 0});
+          for (; it != sorted.end() && it->first == want; ++it) {
+            const size_t j = it->second;
+            if (j <= k || body[j] == body[k]) continue;
+            const dem::Vec3 d = p.x[j] - p.x[k];
+            const double overlap = p.radius[j] + p.radius[k] - std::sqrt(dem::Dot(d, d));
+            const double fraction = overlap / (2 * std::min(p.radius[j], p.radius[k]));
+            if (fraction > deepest.fraction) deepest = {fraction, k, j};
+          }
+        }
+  }
+  return deepest;
+}
 
 // Step 1: bed.file loaded (and so checked, sim/bed_io.h) into a system of the scene's model, its
 // radii checked against the scene's; its surface and top measured.
@@ -114,6 +183,31 @@ FileBed CheckBedFile(Scene* scene) {
     if (!used[m]) continue;
     const double t = dem::RayleighTimeStep(lo, scene->materials[static_cast<int>(m)]);
     f.time_step = std::min(f.time_step, scene->rayleigh_fraction * t);
+  }
+  // Its state: no sphere faster than its own radius a step (it would jump through a neighbour),
+  // no two bodies overlapping past health.max_overlap (the run would stop at its first step,
+  // blaming the time step; these are the file's).
+  for (size_t k = 0; k < p.size(); ++k) {
+    const double speed = std::sqrt(dem::Dot(p.v[k], p.v[k]));
+    if (!(speed * f.time_step <= p.radius[k])) {
+      Refuse(*scene, "bed.file",
+             "particles slower than their radius a time step (" +
+                 Num(p.radius[k] / f.time_step, 4) + " m/s for particle " +
+                 std::to_string(p.id[k]) + ")",
+             bed.file,
+             "/particles/velocity: particle " + std::to_string(p.id[k]) + " at " + Num(speed, 4) +
+                 " m/s");
+    }
+  }
+  const DeepestOverlap deepest = FindDeepestOverlap(system);
+  if (deepest.fraction > scene->max_overlap) {
+    Refuse(*scene, "bed.file",
+           "particles overlapping by at most health.max_overlap (" + Num(scene->max_overlap, 4) +
+               " of the smaller diameter)",
+           bed.file,
+           "/particles/position: particles " + std::to_string(p.id[deepest.a]) + " and " +
+               std::to_string(p.id[deepest.b]) + " overlap by " + Num(deepest.fraction, 4) +
+               " of the smaller diameter");
   }
   // The surface and top as World::StartDig measures them.
   const double r_max = bed.radius_max;

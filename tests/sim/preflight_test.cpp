@@ -299,6 +299,27 @@ TEST(PreflightTest, BinaryBytesInAMessageAreEscaped) {
   EXPECT_EQ(err.find('\n'), err.size() - 1) << err;
 }
 
+// Defect: a bed file with two coincident particles, or one at 1e30 m/s, passed `check`; the run
+// then stopped at its first step blaming the time step. Now refused naming the file and the
+// particles: overlap past health.max_overlap of the smaller diameter (the lattice's touching
+// spheres overlap by 0), or a particle faster than its radius a step.
+TEST(PreflightTest, BedFileWithOverlappingOrFlyingParticlesIsRefused) {
+  const std::string overlap = Bed("overlap.h5");
+  // Particle 9 moved half a diameter towards particle 10 (its neighbour along x on the lattice).
+  SetBedValue(overlap, "/particles/position", 9, 0, 0.008 * 2 * 9 + 0.008 + 0.008);
+  InputError e = Refusal(WriteScene("overlap.yaml", "overlap.h5"));
+  EXPECT_EQ(e.key(), "bed.file") << e.what();
+  EXPECT_NE(std::string(e.what()).find("overlap by 0.5 of the smaller diameter"), std::string::npos)
+      << e.what();
+  const std::string flying = Bed("flying.h5");
+  SetBedValue(flying, "/particles/velocity", 9, 2, 1e30);
+  e = Refusal(WriteScene("flying.yaml", "flying.h5"));
+  EXPECT_EQ(e.key(), "bed.file") << e.what();
+  EXPECT_NE(std::string(e.what()).find("/particles/velocity: particle 9 at 1e+30 m/s"),
+            std::string::npos)
+      << e.what();
+}
+
 // Defect: bed.material was ignored when bed.file was set (a sweep's grid over bed.material on
 // one bed file ran snow under the name ice, exit 0). A scene whose bed.material is not that of
 // the file's particles is now refused.
