@@ -485,6 +485,18 @@ int Main(int argc, char** argv) {
       }
       std::unique_ptr<render::FrameSequence> frames;
       if (!run_frames.dir.empty()) {
+        // Checked before the renderer is made (an OpenGL context): at most a frame a step, a
+        // spacing below the time step is a typo (1e-300 for 1e-3).
+        options.frame_every = run_frames.every > 0 ? run_frames.every : scene.render.every;
+        if (options.frame_every > 0 && options.frame_every < scene.time_step) {
+          char text[96];
+          std::snprintf(text, sizeof text,
+                        ": expected at least the time step (%.6g s) between frames, got %.6g",
+                        scene.time_step, options.frame_every);
+          throw sim::InputError(
+              (run_frames.every > 0 ? std::string("--every") : scene.path + ": render.every") +
+              text);
+        }
         // Rendering happens inside the run loop's frame callback, between steps: the DEM's
         // OpenMP threads are idle then, and llvmpipe gets as many threads as the DEM had.
         render::FrameOptions frame_options =
@@ -496,17 +508,6 @@ int Main(int argc, char** argv) {
         }
         frames = std::make_unique<render::FrameSequence>(frame_options);
         options.on_frame = [&frames](const sim::WorldView& view) { frames->Add(view); };
-        options.frame_every = run_frames.every > 0 ? run_frames.every : scene.render.every;
-        // At most a frame a step: a spacing below the time step is a typo (1e-300 for 1e-3).
-        if (options.frame_every > 0 && options.frame_every < scene.time_step) {
-          char text[96];
-          std::snprintf(text, sizeof text,
-                        ": expected at least the time step (%.6g s) between frames, got %.6g",
-                        scene.time_step, options.frame_every);
-          throw sim::InputError(
-              (run_frames.every > 0 ? std::string("--every") : scene.path + ": render.every") +
-              text);
-        }
       }
       const int status = sim::RunScene(scene, options);
       if (frames) {
