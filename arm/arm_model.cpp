@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <cerrno>
 #include <cmath>
+#include <cstddef>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -61,24 +62,25 @@ class CaptureHandler : public console_bridge::OutputHandler {
   std::string first_error;
 };
 
-// 1-based line of the first `<tag ... name="name"` in the text, or 0.
-// `text` with the regex metacharacters escaped.
-std::string RegexEscape(const std::string& text) {
-  std::string escaped;
-  for (char c : text) {
+// Offset of the first `<tag ... name="name"` in the text, or std::string::npos.
+size_t ElementAt(const std::string& text, const std::string& tag, const std::string& name) {
+  std::string escaped;  // the name with the regex metacharacters escaped
+  for (char c : name) {
     if (std::strchr(".^$|()[]{}*+?\\", c)) escaped += '\\';
     escaped += c;
   }
-  return escaped;
-}
-
-int LineOf(const std::string& text, const std::string& tag, const std::string& name) {
-  const std::string escaped = RegexEscape(name);
   const std::regex pattern("<\\s*" + tag + "\\b[^>]*\\bname\\s*=\\s*[\"']" + escaped + "[\"']");
   std::smatch match;
-  if (!std::regex_search(text, match, pattern)) return 0;
+  if (!std::regex_search(text, match, pattern)) return std::string::npos;
+  return static_cast<size_t>(match.position(0));
+}
+
+// 1-based line of the first `<tag ... name="name"` in the text, or 0.
+int LineOf(const std::string& text, const std::string& tag, const std::string& name) {
+  const size_t at = ElementAt(text, tag, name);
+  if (at == std::string::npos) return 0;
   const auto begin = text.begin();
-  return 1 + static_cast<int>(std::count(begin, begin + match.position(0), '\n'));
+  return 1 + static_cast<int>(std::count(begin, begin + static_cast<std::ptrdiff_t>(at), '\n'));
 }
 
 // Builds the one-line messages: "SOURCE:LINE: ELEMENT: expected ..., got ...".
@@ -101,10 +103,8 @@ class Reporter {
   // ("" when there is none): urdfdom reads a value it cannot parse as 0.
   std::string Raw(const std::string& link, const std::string& child,
                   const std::string& attr) const {
-    std::smatch start;
-    const std::regex open("<\\s*link\\b[^>]*\\bname\\s*=\\s*[\"']" + RegexEscape(link) + "[\"']");
-    if (!std::regex_search(text_, start, open)) return "";
-    const size_t from = static_cast<size_t>(start.position(0));
+    const size_t from = ElementAt(text_, "link", link);
+    if (from == std::string::npos) return "";
     const size_t to = text_.find("</link>", from);
     const std::string body =
         text_.substr(from, to == std::string::npos ? std::string::npos : to - from);

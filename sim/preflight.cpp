@@ -72,14 +72,13 @@ DeepestOverlap FindDeepestOverlap(const dem::System& system) {
   const size_t n = p.size();
   DeepestOverlap deepest;
   if (n < 2) return deepest;
-  // The body of each sphere: its clump, or itself.
+  // The body of each sphere: its clump, or itself (the id map only for a bed of clumps).
   std::vector<int64_t> body(n);
-  std::unordered_map<int64_t, size_t> index;
-  for (size_t k = 0; k < n; ++k) {
-    body[k] = -1 - static_cast<int64_t>(k);
-    index.emplace(p.id[k], k);
-  }
+  for (size_t k = 0; k < n; ++k) body[k] = -1 - static_cast<int64_t>(k);
   const dem::Clumps& clumps = system.clumps();
+  std::unordered_map<int64_t, size_t> index;
+  if (clumps.size() > 0)
+    for (size_t k = 0; k < n; ++k) index.emplace(p.id[k], k);
   for (size_t c = 0; c < clumps.size(); ++c) {
     for (int32_t m = clumps.first[c]; m < clumps.first[c + 1]; ++m) {
       const auto it = index.find(clumps.member[static_cast<size_t>(m)]);

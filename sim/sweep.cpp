@@ -316,10 +316,6 @@ SweepCase MakeCase(const std::string& file, const std::string& default_base, con
   return c;
 }
 
-}  // namespace
-
-namespace {
-
 // A map's keys once each (yaml-cpp keeps both of a duplicate; the scene loader refuses them too).
 // `where` is the map's dotted path ("" at the top).
 void RefuseDuplicateKeys(const std::string& path, const YAML::Node& map, const std::string& where) {

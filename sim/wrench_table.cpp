@@ -208,6 +208,25 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
                              const WrenchTableOptions& options) {
   if (!(options.rho_step_mm > 0) || !(options.rho_max_mm >= 0))
     throw InputError("table build: expected a rho step > 0 and a rho end >= 0 (mm)");
+  // Grid points: far past any pass's length is a typo, not a table.
+  const double points = options.rho_max_mm / options.rho_step_mm + 1;
+  if (!(points <= 1e7)) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "--rho-max-mm %g / --rho-step-mm %g: expected at most 1e7 grid points, got %.3g",
+                  options.rho_max_mm, options.rho_step_mm, points);
+    throw InputError(text);
+  }
+  // The table lands neither on a folder nor among the case files (the next build would read it
+  // as one).
+  std::error_code ec;
+  if (fs::is_directory(table_path, ec))
+    throw InputError("-o " + table_path + ": expected a file to write, got a folder");
+  if (fs::weakly_canonical(fs::path(table_path).parent_path(), ec) ==
+      fs::weakly_canonical(fs::path(dir) / "cases", ec)) {
+    throw InputError("-o " + table_path + ": names a file in " + dir +
+                     "/cases/, where the case files are; give another table file");
+  }
   // The cases, by file name.
   const fs::path cases_dir = fs::path(dir) / "cases";
   std::vector<fs::path> files;

@@ -88,7 +88,6 @@ std::string OneLine(const std::string& message) {
   return out;
 }
 
-// A number > 0 that is finite: CLI11's PositiveNumber lets "nan" and "inf" through.
 // Options shared by `bed` and `run`.
 struct SceneCommand {
   std::string scene;
@@ -316,9 +315,9 @@ int Main(int argc, char** argv) {
   SceneCommand balovnev_args;
   CLI::App* balovnev = add_study(
       &balovnev_args, "balovnev",
-      "The scene's dig (pass 1) against Balovnev's analytical model (../shared/FACTS.md section 7) "
-      "along "
-      "the same path: OUT.h5 (the dig), OUT.balovnev.csv, a table on stdout, OUT.balovnev.png",
+      "The scene's dig (pass 1) against Balovnev's analytical model (../shared/FACTS.md section "
+      "7) along the same path: OUT.h5 (the dig), OUT.balovnev.csv, a table on stdout, "
+      "OUT.balovnev.png",
       "out/balovnev.h5");
   double balovnev_phi = 44, balovnev_delta = 28, balovnev_rake = 10;
   bool balovnev_buried = false, balovnev_no_plot = false;

@@ -1,6 +1,5 @@
 #include "tools/sweep_cli.h"
 
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -109,24 +108,6 @@ int SweepCommands::Run() {
     return sim::RunSweep(sweep, options);
   }
   if (*build_) {
-    RefuseFolder("-o", build_output_);
-    // The table must not land on a case file (the next build would read it as one).
-    std::error_code ec;
-    if (fs::weakly_canonical(fs::path(build_output_).parent_path(), ec) ==
-        fs::weakly_canonical(fs::path(build_dir_) / "cases", ec)) {
-      throw sim::InputError("-o " + build_output_ + ": names a file in " + build_dir_ +
-                            "/cases/, where the case files are; give another table file");
-    }
-    // Grid points: far past any pass's length is a typo, not a table.
-    const double points = build_options_.rho_max_mm / build_options_.rho_step_mm + 1;
-    if (!(points <= 1e7)) {
-      char text[160];
-      std::snprintf(text, sizeof text,
-                    "--rho-max-mm %g / --rho-step-mm %g: expected at most 1e7 grid points, "
-                    "got %.3g",
-                    build_options_.rho_max_mm, build_options_.rho_step_mm, points);
-      throw sim::InputError(text);
-    }
     const std::string summary = sim::BuildWrenchTable(build_dir_, build_output_, build_options_);
     std::fprintf(stderr, "scoopsim: wrote %s: %s\n", build_output_.c_str(), summary.c_str());
     return 0;

@@ -444,6 +444,11 @@ TEST(ArmDriverTest, BadArmBlockExitsTwoWithOneLine) {
   ExpectBadScene(h, "arm.d_term: expected implicit or explicit, got halfway");
   const std::string i = WriteArmScene("bad_step.yaml", "arm:\n  step: 2.5e-3\n");
   ExpectBadScene(i, "arm.step: expected a step only with arm.wrench: table");
+  // Defect: a dig path 100 m out of the arm's reach passed `check` and ran to exit 0 with no
+  // wrench ("no fault"). More than 50 mm out of reach is refused by the preflight, before the bed.
+  const std::string j =
+      WriteArmScene("far_base.yaml", "arm:\n  base: {reach: [100, 0.175], height: 0.172}\n");
+  ExpectBadScene(j, "far_base.yaml: arm.base: expected the dig's path within the arm's reach");
 }
 
 }  // namespace

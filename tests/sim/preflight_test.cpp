@@ -420,36 +420,6 @@ TEST(PreflightTest, FrameSpacingBelowTheTimeStepIsRefused) {
       << err;
 }
 
-// Defect: a dig path 100 m out of the arm's reach passed `check` and ran to exit 0 with no
-// wrench ("no fault"). A path more than 50 mm out of reach is now refused by the preflight,
-// naming arm.base.
-TEST(PreflightTest, ArmPathOutOfReachIsRefused) {
-  const fs::path source = SCOOPSIM_SOURCE_DIR;
-  std::ifstream in(source / "scenes" / "arm" / "nominal_snow.yaml");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const auto replace = [&text](const std::string& from, const std::string& to) {
-    const size_t at = text.find(from);
-    ASSERT_NE(at, std::string::npos) << from;
-    text.replace(at, from.size(), to);
-  };
-  replace("../materials.yaml", (source / "scenes" / "materials.yaml").string());
-  replace("../../assets/scoop.stl", (source / "assets" / "scoop.stl").string());
-  replace("urdf: ../../assets/lander_arm.urdf",
-          "urdf: " + (source / "assets" / "lander_arm.urdf").string());
-  const fs::path near = Dir() / "arm_near.yaml";
-  WriteText(near, text);
-  Scene good = LoadScene(near.string());
-  EXPECT_NO_THROW(Preflight(&good, Work::kRun));
-  replace("faults:", "base: {reach: [100, 0.175], height: 0.172}\n  faults:");
-  const fs::path far = Dir() / "arm_far.yaml";
-  WriteText(far, text);
-  const InputError e = Refusal(far.string());
-  EXPECT_NE(std::string(e.what()).find(far.string() + ": arm.base: expected the dig's path within "
-                                                      "the arm's reach"),
-            std::string::npos)
-      << e.what();
-}
-
 // Diagnostics never print non-physical times: the progress clock of a run planned for 1e299 s
 // read "ETA -153722867280912930:-8".
 TEST(PreflightTest, ProgressClockPrintsOnlyPhysicalTimes) {
