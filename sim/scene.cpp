@@ -22,6 +22,7 @@
 #include "arm/controller.h"
 #include "dem/mesh.h"
 #include "sim/mesh_io.h"
+#include "sim/yaml_input.h"
 
 namespace sim {
 namespace {
@@ -48,11 +49,7 @@ std::string Num(double v) {
 // A whole number held in a double, for messages.
 std::string Int(double v) { return std::to_string(static_cast<long long>(v)); }
 
-// 1-based line of a node, or 1 for a node without a mark (e.g. an empty document).
-int LineOf(const YAML::Node& node) {
-  const int line = node.Mark().line;
-  return line >= 0 ? line + 1 : 1;
-}
+using yaml_input::LineOf;
 
 // One-line description of what a node holds, as written: "-1", "[2e-3, 1e-3]", "a map".
 std::string Describe(const YAML::Node& node) {
@@ -115,17 +112,9 @@ bool ReadFile(const std::string& path, std::string* text) {
   return true;
 }
 
-// Parses YAML text; syntax errors become one-line InputErrors at the line yaml-cpp reports.
+// Parses a scene or materials file: one document, syntax errors at their line (yaml_input.h).
 YAML::Node Parse(const std::string& file, const std::string& text) {
-  try {
-    return YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    const int line = e.mark.line >= 0 ? e.mark.line + 1 : 1;
-    Fail(file, line, "syntax", "valid YAML", "a syntax error: " + e.msg);
-  } catch (const YAML::Exception& e) {
-    const int line = e.mark.line >= 0 ? e.mark.line + 1 : 1;
-    Fail(file, line, "syntax", "valid YAML", "an error: " + e.msg);
-  }
+  return yaml_input::ParseDocument(file, text);
 }
 
 // A YAML map being read: rejects unknown keys up front and gives typed, range-checked values
@@ -141,7 +130,7 @@ class MapReader {
       Fail(file_, LineOf(node_), path_.empty() ? "(top level)" : path_,
            "a map with keys " + Join(allowed_), Describe(node_));
     }
-    std::map<std::string, int> seen;  // key -> line, to reject duplicates
+    yaml_input::RefuseDuplicateKeys(file_, node_, path_);
     for (auto it = node_.begin(); it != node_.end(); ++it) {
       const YAML::Node key_node = it->first;
       if (!key_node.IsScalar()) {
@@ -154,11 +143,6 @@ class MapReader {
       if (!known) {
         Fail(file_, LineOf(key_node), Key(key), "one of the keys " + Join(allowed_),
              "an unknown key '" + key + "'");
-      }
-      const auto [where, inserted] = seen.emplace(key, LineOf(key_node));
-      if (!inserted) {
-        Fail(file_, LineOf(key_node), Key(key), "each key once", "a second '" + key + "'",
-             "first at line " + std::to_string(where->second));
       }
     }
   }
@@ -1319,6 +1303,12 @@ Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
   }
 
   scene.duration = top.Number("duration", 0.0, "a number >= 0 (s)", NonNegative);
+  if (top.Has("duration") && top.Has("dig")) {
+    // A dig runs until its last pass ends; a duration beside it would be ignored.
+    Fail(path, LineOf(root["duration"]), "duration",
+         "no duration in a scene with a dig (its passes set how long it runs)",
+         Describe(root["duration"]), "remove it, or remove dig for a plain run");
+  }
   if (top.Has("output")) {
     const MapReader out(path, root["output"], "output",
                         {"interval", "snapshot_every", "flush_seconds"});

@@ -31,6 +31,7 @@
 #include "sim/trajectory.h"
 #include "sim/world.h"
 #include "sim/wrench_table.h"
+#include "sim/yaml_input.h"
 
 namespace sim {
 namespace fs = std::filesystem;
@@ -316,21 +317,6 @@ SweepCase MakeCase(const std::string& file, const std::string& default_base, con
   return c;
 }
 
-// A map's keys once each (yaml-cpp keeps both of a duplicate; the scene loader refuses them too).
-// `where` is the map's dotted path ("" at the top).
-void RefuseDuplicateKeys(const std::string& path, const YAML::Node& map, const std::string& where) {
-  if (!map.IsMap()) return;
-  std::map<std::string, int> seen;  // key -> line
-  for (auto it = map.begin(); it != map.end(); ++it) {
-    const std::string key = it->first.IsScalar() ? it->first.Scalar() : YamlText(it->first);
-    const auto [first, inserted] = seen.emplace(key, LineOf(it->first));
-    if (!inserted) {
-      Fail(path, it->first, where.empty() ? key : where + "." + key, "each key once",
-           "a second '" + key + "' (the first at line " + std::to_string(first->second) + ")");
-    }
-  }
-}
-
 }  // namespace
 
 Sweep LoadSweep(const std::string& path) {
@@ -343,16 +329,10 @@ Sweep LoadSweep(const std::string& path) {
   if (!in) throw InputError(path + ": cannot open sweep file");
   std::stringstream buffer;
   buffer << in.rdbuf();
-  YAML::Node root;
-  try {
-    root = YAML::Load(buffer.str());
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, e.mark.line >= 0 ? e.mark.line + 1 : 1, "syntax", "valid YAML",
-                     "a syntax error: " + e.msg);
-  }
+  const YAML::Node root = yaml_input::ParseDocument(path, buffer.str());
   if (!root.IsMap())
     Fail(path, root, "(top level)", "a map with keys scene, grid, cases", Describe(root));
-  RefuseDuplicateKeys(path, root, "");
+  yaml_input::RefuseDuplicateKeys(path, root, "");
   for (auto it = root.begin(); it != root.end(); ++it) {
     const std::string key = it->first.as<std::string>();
     if (key != "scene" && key != "grid" && key != "cases" && key != "notes") {
@@ -372,7 +352,7 @@ Sweep LoadSweep(const std::string& path) {
     if (!grid.IsMap() || grid.size() == 0) {
       Fail(path, grid, "grid", "a non-empty map of key path: values", Describe(grid));
     }
-    RefuseDuplicateKeys(path, grid, "grid");
+    yaml_input::RefuseDuplicateKeys(path, grid, "grid");
     std::vector<Variable> variables;
     for (auto it = grid.begin(); it != grid.end(); ++it)
       variables.push_back(ReadVariable(path, "grid", it->first, it->second));
@@ -401,7 +381,7 @@ Sweep LoadSweep(const std::string& path) {
       const YAML::Node entry = cases[i];
       const std::string where = "cases[" + std::to_string(i) + "]";
       if (!entry.IsMap()) Fail(path, entry, where, "a map with keys name, set", Describe(entry));
-      RefuseDuplicateKeys(path, entry, where);
+      yaml_input::RefuseDuplicateKeys(path, entry, where);
       for (auto it = entry.begin(); it != entry.end(); ++it) {
         const std::string key = it->first.as<std::string>();
         if (key != "name" && key != "set")
@@ -413,7 +393,7 @@ Sweep LoadSweep(const std::string& path) {
         Fail(path, set ? set : entry, where + ".set", "a non-empty map of key path: value",
              Describe(set));
       }
-      RefuseDuplicateKeys(path, set, where + ".set");
+      yaml_input::RefuseDuplicateKeys(path, set, where + ".set");
       Draft d;
       for (auto it = set.begin(); it != set.end(); ++it) {
         const std::string key = it->first.as<std::string>();

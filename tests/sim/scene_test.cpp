@@ -520,6 +520,19 @@ const BadCase kBadCases[] = {
      "",
      {"@.yaml:1: materials: expected the path of a readable materials file, got nope.yaml",
       "cannot open"}},
+    {"second_document",
+     "duration: 0.01",
+     "duration: 0.01\n---\nduration: 0.02",
+     "",
+     "",
+     {"@.yaml:13: (document 2): expected one YAML document, got a second one after '---'",
+      "it would be ignored"}},
+    {"second_document_in_materials",
+     "",
+     "",
+     "restitution: 0.7, friction: 0.58, rolling_friction: 0.05}\n",
+     "restitution: 0.7, friction: 0.58, rolling_friction: 0.05}\n---\nmaterials: {}\n",
+     {"@_mats.yaml:8: (document 2): expected one YAML document"}},
     {"duplicate_key",
      "duration: 0.01",
      "duration: 0.01\nduration: 0.02",
@@ -755,8 +768,7 @@ std::string DigScene(const std::string& mesh) {
          "  trajectory:\n"                    // 7
          "    preset: table1\n"               // 8
          "    start: [0.13, 0.085]\n" +       // 9
-         kMoves +                             // 10-15
-         "duration: 1.0\n";                   // 16
+         kMoves;                              // 10-15
 }
 
 const std::string kScoopStl = kSourceDir + "/assets/scoop.stl";
@@ -881,6 +893,8 @@ std::vector<DigCase> DigCases() {
       {"moves_and_segment", "    start: [0.13, 0.085]",
        "    start: [0.13, 0.085]\n    linear: {speed: 0.1}", stl, 10, "dig.trajectory.linear",
        "got both linear and moves"},
+      {"duration_beside_dig", "dig:\n", "duration: 1.0\ndig:\n", stl, 5, "duration",
+       "expected no duration in a scene with a dig"},
       {"empty_moves", kMoves, "    moves: []\n", stl, 10, "dig.trajectory.moves",
        "a non-empty list of moves"},
   };

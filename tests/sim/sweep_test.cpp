@@ -141,7 +141,7 @@ TEST(SweepFileTest, DuplicateKeysFail) {
     return std::string();
   };
   EXPECT_NE(error(scene + scene + "grid: {dig.passes: [1]}\n")
-                .find("dup.yaml:2: scene: expected each key once, got a second 'scene' (the first "
+                .find("dup.yaml:2: scene: expected each key once, got a second 'scene' (first "
                       "at line 1)"),
             std::string::npos);
   EXPECT_NE(error(scene + "grid: {dig.passes: [1]}\ngrid: {dig.bite_depth: [0.01]}\n")
