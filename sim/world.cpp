@@ -126,7 +126,8 @@ int World::Pour(bool quiet, SettleReport* report) {
         return !StopRequested();
       },
       &point);
-  progress.Finish(system_->time(), particle_steps());
+  // Stopped by a signal: the last line says how far the pour got, not 100%.
+  progress.Finish(system_->time(), particle_steps(), !StopRequested());
   // (A pour that has ended is not kept: the bed is whole, and is made ready and returned.)
   const bool ended = point.settled && point.poured >= scene_.bed.count;
   if (!pour_file_.empty() && StopRequested() && point.started && !ended && r.status.ok()) {

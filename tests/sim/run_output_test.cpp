@@ -314,6 +314,8 @@ TEST_F(RunOutputTest, StoppedPourIsKeptAndGoesOn) {
   const int stopped = Wait(pid);
   if (stopped == 130) {
     EXPECT_NE(ReadText(log).find("the bed poured so far"), std::string::npos) << ReadText(log);
+    // Its last progress line says where the pour stood, not 100% (it did before 2026-12-04).
+    EXPECT_EQ(ReadText(log).find("bed 100.0%"), std::string::npos) << ReadText(log);
     EXPECT_TRUE(fs::exists(kept));
   } else {
     EXPECT_EQ(stopped, 0) << ReadText(log);  // it had finished already
