@@ -2,11 +2,12 @@
 // sec2 driver, except that the superblock on disk always reads as a closed file. Why and what it
 // guarantees: ARCHITECTURE.md "Crash-safe output".
 //
-// HDF5 1.10 in SWMR mode writes metadata in dependency order (a block is on disk before anything
-// that points to it) and never reuses freed space, so every prefix of its writes is a consistent
-// file; but it marks the superblock "open for writing" (file consistency flags), and a file killed
-// in that state opens only in SWMR-read mode or after `h5clear`. This driver rewrites each
-// superblock image on its way to disk:
+// HDF5 1.10 in SWMR mode writes the metadata of a dataset's appends in dependency order (a block
+// is on disk before anything that points to it) and never reuses freed space, so every prefix of
+// those writes is a consistent file (a new link in a group is one write too, as the output keeps
+// a group's links in its header: GroupGcpl in sim/internal_h5.h); but it marks the superblock "open
+// for writing" (file consistency flags), and a file killed in that state opens only in SWMR-read
+// mode or after `h5clear`. This driver rewrites each superblock image on its way to disk:
 //   - the consistency flags are cleared (plain readers open it as a closed file);
 //   - its end-of-file address is at least the end of every write so far (a block written after
 //     the superblock and pointed to by later metadata stays inside the file), and the file is
@@ -15,14 +16,17 @@
 // stays the consistent prefix that was on disk: row counts are never ahead of the rows.
 #include <fcntl.h>
 #include <hdf5.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 
 #include "sim/internal_h5.h"
@@ -131,7 +135,20 @@ struct CleanFile {
 CleanFile* Of(H5FD_t* f) { return reinterpret_cast<CleanFile*>(f); }
 const CleanFile* Of(const H5FD_t* f) { return reinterpret_cast<const CleanFile*>(f); }
 
+// Test hook: SCOOPSIM_H5_KILL_AT_WRITE=K SIGKILLs the process just before its K-th write to a
+// file of this driver, so a test can kill a run between any two of its writes
+// (tests/sim/run_output_test.cpp, KilledBeforeAnyWriteLeavesEverySnapshotReadable).
+void KillHereIfAsked() {
+  static const long kill_at = [] {
+    const char* text = std::getenv("SCOOPSIM_H5_KILL_AT_WRITE");
+    return text != nullptr ? std::atol(text) : 0L;
+  }();
+  static std::atomic<long> writes{0};
+  if (kill_at > 0 && ++writes == kill_at) ::raise(SIGKILL);
+}
+
 bool WriteAll(int fd, const unsigned char* p, size_t size, haddr_t at, CleanFile* f) {
+  KillHereIfAsked();
   while (size > 0) {
     const ssize_t n = ::pwrite(fd, p, size, static_cast<off_t>(at));
     if (n < 0 && errno == EINTR) continue;

@@ -50,6 +50,17 @@ void MakeParentFolders(const std::string& path) {
   }
 }
 
+namespace {
+
+// Sets on a group (or file) creation list: links in the header up to `links`, room for them.
+void SetCompactLinks(hid_t plist, unsigned links) {
+  links = std::clamp(links, 2u, 65535u);
+  CheckOk(H5Pset_link_phase_change(plist, links, links - 1), "H5Pset_link_phase_change");
+  CheckOk(H5Pset_est_link_info(plist, links, 16), "H5Pset_est_link_info");
+}
+
+}  // namespace
+
 Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
   if (got_swmr != nullptr) *got_swmr = false;
   MakeParentFolders(path);
@@ -59,6 +70,10 @@ Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
   // Strong close: H5Fclose really closes the file, so "closed" means "complete on disk".
   Handle fapl(CheckId(H5Pcreate(H5P_FILE_ACCESS), "H5Pcreate"), H5Pclose);
   CheckOk(H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG), "H5Pset_fclose_degree");
+  // The root group's links in its header (GroupGcpl), and so those of the groups made under it
+  // as intermediate groups.
+  Handle fcpl(CheckId(H5Pcreate(H5P_FILE_CREATE), "H5Pcreate"), H5Pclose);
+  SetCompactLinks(fcpl.get(), kGroupLinks);
   hid_t file = H5I_INVALID_HID;
   if (swmr) {
     // SWMR needs the 1.10 file format. If the file system refuses (no file locking), fall back
@@ -67,13 +82,13 @@ Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
             "H5Pset_libver_bounds");
     CheckOk(H5Pset_driver(fapl.get(), CleanHeaderDriver(), nullptr), "H5Pset_driver");
     H5E_BEGIN_TRY {
-      file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC | H5F_ACC_SWMR_WRITE, H5P_DEFAULT, fapl.get());
+      file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC | H5F_ACC_SWMR_WRITE, fcpl.get(), fapl.get());
     }
     H5E_END_TRY;
     if (file >= 0 && got_swmr != nullptr) *got_swmr = true;
   }
   if (file < 0) {
-    H5E_BEGIN_TRY { file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()); }
+    H5E_BEGIN_TRY { file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()); }
     H5E_END_TRY;
   }
   if (file < 0) {
@@ -88,6 +103,18 @@ Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
     throw InputError(path + ": cannot create the output file: " + reason);
   }
   return Handle(file, H5Fclose);
+}
+
+Handle IntermediateGroupsLcpl() {
+  Handle lcpl(CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
+  CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1), "H5Pset_create_intermediate_group");
+  return lcpl;
+}
+
+Handle GroupGcpl(unsigned links) {
+  Handle gcpl(CheckId(H5Pcreate(H5P_GROUP_CREATE), "H5Pcreate"), H5Pclose);
+  SetCompactLinks(gcpl.get(), links);
+  return gcpl;
 }
 
 namespace {
@@ -111,13 +138,6 @@ Handle VariableStringType() {
   CheckOk(H5Tset_size(type.get(), H5T_VARIABLE), "H5Tset_size");
   CheckOk(H5Tset_cset(type.get(), H5T_CSET_UTF8), "H5Tset_cset");
   return type;
-}
-
-// Link-creation properties that create missing intermediate groups ("/series/scoop/force").
-Handle IntermediateGroupsLcpl() {
-  Handle lcpl(CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
-  CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1), "H5Pset_create_intermediate_group");
-  return lcpl;
 }
 
 std::string XmlEscape(const std::string& text) {
@@ -241,6 +261,27 @@ std::string SnapshotGroupName(int64_t index) {
   return name;
 }
 
+void MakeSnapshotsGroup(hid_t file, int64_t capacity) {
+  if (H5Lexists(file, "/snapshots", H5P_DEFAULT) > 0) return;
+  const Handle gcpl = GroupGcpl(static_cast<unsigned>(std::min<int64_t>(capacity, 65535)));
+  const Handle group(CheckId(H5Gcreate2(file, "/snapshots", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
+                             "H5Gcreate2 /snapshots"),
+                     H5Gclose);
+}
+
+int64_t SnapshotsCapacity(hid_t file) {
+  htri_t exists = -1;
+  H5E_BEGIN_TRY { exists = H5Lexists(file, "/snapshots", H5P_DEFAULT); }
+  H5E_END_TRY;
+  if (exists <= 0) return 0;
+  const Handle group(CheckId(H5Gopen2(file, "/snapshots", H5P_DEFAULT), "H5Gopen2 /snapshots"),
+                     H5Gclose);
+  const Handle gcpl(CheckId(H5Gget_create_plist(group.get()), "H5Gget_create_plist"), H5Pclose);
+  unsigned links = 0, name_length = 0;
+  CheckOk(H5Pget_est_link_info(gcpl.get(), &links, &name_length), "H5Pget_est_link_info");
+  return links;
+}
+
 SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
                                     const dem::Particles& p) {
   const size_t n = p.size();
@@ -249,8 +290,9 @@ SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
     throw std::invalid_argument("WriteParticleSnapshot: particle arrays differ in length");
   }
   SnapshotEntry entry{SnapshotGroupName(index), time, static_cast<int64_t>(n), {}};
-  Handle lcpl = IntermediateGroupsLcpl();
-  Handle group(CheckId(H5Gcreate2(file, entry.group.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+  const Handle lcpl = IntermediateGroupsLcpl();
+  const Handle gcpl = GroupGcpl(kSnapshotLinks);
+  Handle group(CheckId(H5Gcreate2(file, entry.group.c_str(), lcpl.get(), gcpl.get(), H5P_DEFAULT),
                        "H5Gcreate2 " + entry.group),
                H5Gclose);
   WriteDoubleAttribute(group.get(), "time", time);
@@ -388,6 +430,7 @@ struct H5Output::Impl {
   std::chrono::steady_clock::time_point last_flush;
   std::map<std::string, Series, std::less<>> series;  // by absolute dataset path
   std::vector<h5::SnapshotEntry> snapshots;
+  int64_t snapshot_capacity = 0;                 // room made in /snapshots (PlanSnapshots)
   std::string group;                             // SetGroup prefix ("" or "/name")
   h5::Handle group_obj;                          // that group, once an attribute was set on it
   int lock_fd = -1;                              // holds the write lock on the file until Close()
@@ -456,11 +499,10 @@ struct H5Output::Impl {
             h5::CheckId(H5Gopen2(file.get(), group.c_str(), H5P_DEFAULT), "H5Gopen2 " + group),
             H5Gclose);
       } else {
-        h5::Handle lcpl(h5::CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
-        h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1),
-                    "H5Pset_create_intermediate_group");
+        const h5::Handle lcpl = h5::IntermediateGroupsLcpl();
+        const h5::Handle gcpl = h5::GroupGcpl(h5::kGroupLinks);
         group_obj = h5::Handle(
-            h5::CheckId(H5Gcreate2(file.get(), group.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+            h5::CheckId(H5Gcreate2(file.get(), group.c_str(), lcpl.get(), gcpl.get(), H5P_DEFAULT),
                         "H5Gcreate2 " + group),
             H5Gclose);
       }
@@ -574,14 +616,19 @@ struct H5Output::Impl {
                             {"speed", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
                             {"material", H5T_STD_I32LE, H5T_NATIVE_INT32, 1},
                             {"awake", H5T_STD_I32LE, H5T_NATIVE_INT32, 1}};
-    h5::Handle lcpl(h5::CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
-    h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1),
-                "H5Pset_create_intermediate_group");
+    // /snapshots with the room the killed run made it with (h5::GroupGcpl).
+    if (!cursor.snapshot_time.empty()) {
+      snapshot_capacity = std::max<int64_t>(h5::SnapshotsCapacity(old.get()),
+                                            static_cast<int64_t>(cursor.snapshot_time.size()));
+      h5::MakeSnapshotsGroup(file.get(), snapshot_capacity);
+    }
+    const h5::Handle lcpl = h5::IntermediateGroupsLcpl();
+    const h5::Handle gcpl = h5::GroupGcpl(h5::kSnapshotLinks);
     for (size_t k = 0; k < cursor.snapshot_time.size(); ++k) {
       const std::string group_name = h5::SnapshotGroupName(static_cast<int64_t>(k));
       const int64_t count = cursor.snapshot_count[k];
       const h5::Handle group(h5::CheckId(H5Gcreate2(file.get(), group_name.c_str(), lcpl.get(),
-                                                    H5P_DEFAULT, H5P_DEFAULT),
+                                                    gcpl.get(), H5P_DEFAULT),
                                          "H5Gcreate2 " + group_name),
                              H5Gclose);
       h5::WriteDoubleAttribute(group.get(), "time", cursor.snapshot_time[k]);
@@ -620,11 +667,10 @@ struct H5Output::Impl {
           in.Read<int64_t>(at + "/triangles", H5T_INTEGER, H5T_NATIVE_INT64, -1, 3, &t);
       const auto part = in.Read<int32_t>(at + "/part", H5T_INTEGER, H5T_NATIVE_INT32, t, 1);
       const auto pose = in.Read<double>(at + "/pose", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 7, &parts);
-      h5::Handle lcpl(h5::CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
-      h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1),
-                  "H5Pset_create_intermediate_group");
+      const h5::Handle lcpl = h5::IntermediateGroupsLcpl();
+      const h5::Handle gcpl = h5::GroupGcpl(h5::kGroupLinks);
       const h5::Handle g(
-          h5::CheckId(H5Gcreate2(file.get(), at.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+          h5::CheckId(H5Gcreate2(file.get(), at.c_str(), lcpl.get(), gcpl.get(), H5P_DEFAULT),
                       "H5Gcreate2 " + at),
           H5Gclose);
       const hsize_t hv = static_cast<hsize_t>(v), ht = static_cast<hsize_t>(t);
@@ -764,12 +810,20 @@ void H5Output::WriteSnapshot(double time, const dem::Particles& particles,
   m.RequireOpen("WriteSnapshot");
   const int64_t index = static_cast<int64_t>(m.snapshots.size());
   m.Write([&] {
+    if (index == 0 && m.snapshot_capacity == 0) m.snapshot_capacity = kDefaultSnapshotCapacity;
+    h5::MakeSnapshotsGroup(m.file.get(), m.snapshot_capacity);
     h5::SnapshotEntry entry = h5::WriteParticleSnapshot(m.file.get(), index, time, particles);
     if (!meshes.empty()) entry.meshes = h5::WriteSnapshotMeshes(m.file.get(), entry.group, meshes);
     m.snapshots.push_back(std::move(entry));
   });
   Flush();
   m.Write([&] { h5::WriteXdmf(m.path, m.snapshots); });
+}
+
+void H5Output::PlanSnapshots(int64_t count) {
+  Impl& m = *impl_;
+  // Room for a quarter more than planned; past it /snapshots goes on in dense storage.
+  if (m.snapshots.empty()) m.snapshot_capacity = std::max<int64_t>(count + count / 4 + 16, 16);
 }
 
 void H5Output::SetStateHash(uint64_t hash) {

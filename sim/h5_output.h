@@ -83,6 +83,13 @@ class H5Output {
   void WriteSnapshot(double time, const dem::Particles& particles,
                      const std::vector<MeshView>& meshes = {});
 
+  // How many snapshots the run plans: /snapshots is made, at the first, with room for them (and
+  // a quarter more) in its header, where a SIGKILL cannot tear its list (sim/internal_h5.h,
+  // GroupGcpl). Without a plan: room for kDefaultSnapshotCapacity. Past the room, snapshots are
+  // still written.
+  void PlanSnapshots(int64_t count);
+  static constexpr int64_t kDefaultSnapshotCapacity = 1024;
+
   void SetStateHash(uint64_t hash);  // root state_hash (hex string) and state_hash_u64
   void SetAttribute(const std::string& name, double value);
   void SetAttribute(const std::string& name, const std::string& value);

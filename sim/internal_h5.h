@@ -67,6 +67,24 @@ void MakeParentFolders(const std::string& path);
 // be created.
 Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr);
 
+// Link-creation properties that create missing intermediate groups ("/series/scoop/force").
+Handle IntermediateGroupsLcpl();
+
+// Group-creation properties for a group that will hold up to `links` links. HDF5 keeps up to 8
+// links in a group's object header and at the 9th moves them to "dense" storage (a fractal heap
+// and a name-index B-tree). Adding a link to a dense group rewrites the B-tree's header and a node
+// in two writes, and a reader needs both (their record counts must agree): a run killed between
+// them leaves a group whose links HDF5's readers cannot follow (h5ls crashed on such files; the
+// resume said "/snapshots/000000/id: missing"). In the header, a new link is one rewrite of it.
+// So a group keeps its links in its header up to `links`, and the header is made large enough for
+// them when the group is made (H5Pset_est_link_info): under SWMR, HDF5 1.10.8 fails the next flush
+// when a header must grow ("slist not empty"). Past `links` the group goes dense, as HDF5's
+// default does at 9. CreateFile gives the root group kGroupLinks, and HDF5 gives an intermediate
+// group its parent's settings.
+constexpr unsigned kGroupLinks = 64;     // an ordinary group (the most: /arm, 12 datasets)
+constexpr unsigned kSnapshotLinks = 16;  // a snapshot: 9 datasets and meshes
+Handle GroupGcpl(unsigned links);
+
 // The clean-header file driver (h5_clean_driver.cpp): POSIX I/O that keeps the superblock on disk
 // that of a closed file (consistency flags clear, end-of-file address covering every write), and
 // drops every write after the first failed one (the file stays as it was then). Registered on
@@ -120,6 +138,12 @@ struct SnapshotEntry {
   std::vector<MeshEntry> meshes;
 };
 std::string SnapshotGroupName(int64_t index);
+
+// Makes /snapshots, with room in its header for `capacity` snapshots (GroupGcpl), unless the file
+// has it already.
+void MakeSnapshotsGroup(hid_t file, int64_t capacity);
+// The room /snapshots of `file` was made with (its estimated link count); 0 without one.
+int64_t SnapshotsCapacity(hid_t file);
 
 // Writes group /snapshots/NNNNNN (attribute time; datasets id int64 (N), position, velocity,
 // angular_velocity (N x 3) [SI], radius (N), material int32 (N), speed |v| (N), connectivity

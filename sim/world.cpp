@@ -293,6 +293,7 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver, const DigResume* resum
   dig.trench = {std::cos(spec.heading), std::sin(spec.heading), 0.0};
   for (int pass = first_pass; pass <= spec.passes; ++pass)
     dig.planned += dig.driver->PlannedDuration(pass, dig.bed);
+  PlanSnapshots();
 
   system_->set_sleep(scene_.sleep);
   summary_ = DigSummary{};
@@ -541,8 +542,17 @@ void World::StartPlain() {
   if (out_) out_->SetAttribute("start_time", t_start_);
   step0_ = system_->step_count();
   particle_steps_ = 0;
+  PlanSnapshots();
   if (out_ && scene_.output.snapshot_every > 0)
     out_->WriteSnapshot(system_->time(), system_->particles());
+}
+
+void World::PlanSnapshots() {
+  if (!out_ || scene_.output.snapshot_every <= 0) return;
+  const double steps = PlannedDuration() / scene_.time_step;
+  const double every = static_cast<double>(scene_.output.snapshot_every);
+  // (A plan beyond what a file can index compactly only sets the most room there is.)
+  out_->PlanSnapshots(static_cast<int64_t>(std::min(steps / every, 1e6)) + 2);
 }
 
 RunResult World::Run(const RunControl& control) {

@@ -150,7 +150,8 @@ class World {
  private:
   struct Dig;
   void StartPlain();
-  void Record();  // the rows, snapshots and pass changes that follow a step (may throw)
+  void PlanSnapshots();  // tells the output how many snapshots the planned run makes
+  void Record();         // the rows, snapshots and pass changes that follow a step (may throw)
   void RecordPlainRow();
   void RecordDigRow();
   void BeginPass();

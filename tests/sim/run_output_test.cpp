@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -333,6 +334,65 @@ TEST_F(RunOutputTest, StoppedPourIsKeptAndGoesOn) {
   EXPECT_EQ(Wait(Spawn({"bed", scene, "-o", whole.string()}, log)), 0) << ReadText(log);
   EXPECT_EQ(sim::SavedRun(bed.string()).RootAttribute("state_hash"),
             sim::SavedRun(whole.string()).RootAttribute("state_hash"));
+}
+
+// A run killed just before any one of its writes (the driver's test hook) leaves a file whose
+// every snapshot reads in full with h5ls (a separate process: HDF5's reader crashed on such files).
+// Before 2026-12-04 /snapshots went to HDF5's dense link storage at its 9th snapshot, and a kill
+// between the rewrites of its B-tree's header and node (2 of about every 44 writes from then on)
+// left its list unreadable. 60 spheres, a snapshot every step: 28 snapshots, about 770 writes,
+// of which every 7th is tried.
+TEST(KilledOutputTest, KilledBeforeAnyWriteLeavesEverySnapshotReadable) {
+  if (std::system("command -v h5ls >/dev/null 2>&1") != 0) GTEST_SKIP() << "no h5ls (hdf5-tools)";
+  const std::string source = SCOOPSIM_SOURCE_DIR;
+  const std::string common =
+      "materials: " + source + "/scenes/materials.yaml\n" + R"(gravity: [0, 0, -1.3]
+time_step: {rayleigh_fraction: 0.25}
+box: {min: [0, 0, 0], max: [0.37, 0.17, 0.2], wall_material: wall}
+neighbor: {skin: 4.0e-3}
+output: {interval: 1.0e-3, snapshot_every: 1, flush_seconds: 0.01}
+)";
+  const fs::path bed = TempDir() / "kill_bed.h5";
+  std::ofstream(TempDir() / "kill_bed.yaml")
+      << common << "bed: {material: snow, radius: 8.0e-3, count: 60, seed: 3,\n"
+      << "      settle: {kinetic_energy: 1.0e-3, max_time: 0.2}}\n";
+  ASSERT_EQ(Wait(Spawn({"bed", (TempDir() / "kill_bed.yaml").string(), "-o", bed.string()},
+                       (TempDir() / "kill_bed.log").string())),
+            0);
+  const fs::path scene = TempDir() / "kill_run.yaml";
+  std::ofstream(scene) << common << "bed: {material: snow, radius: 8.0e-3, count: 60, seed: 3, "
+                       << "file: " << bed.string() << "}\nduration: 1.0e-3\n";
+  const fs::path out = TempDir() / "kill_run.h5";
+  const fs::path listing = TempDir() / "kill_run.txt";
+  int most_snapshots = 0, killed = 0;
+  for (int k = 1; k < 5000; k += 7) {
+    fs::remove(out);
+    const std::string run = "SCOOPSIM_H5_KILL_AT_WRITE=" + std::to_string(k) + " " +
+                            SCOOPSIM_BINARY + " run " + scene.string() + " -o " + out.string() +
+                            " --threads 1 -q 2>/dev/null";
+    const int status = std::system(run.c_str());
+    if (status == 0) break;  // it ended before its k-th write
+    ++killed;
+    if (!fs::exists(out)) continue;  // killed before the file was put in place
+    const std::string h5ls = "h5ls -r " + out.string() + " >" + listing.string() + " 2>&1";
+    const int read = std::system(h5ls.c_str());
+    const std::string text = ReadText(listing.string());
+    EXPECT_EQ(read, 0) << "killed before write " << k << ": h5ls: " << text.substr(0, 300);
+    int groups = 0, datasets = 0;
+    for (const std::string& line : Lines(text)) {
+      if (line.rfind("/snapshots/", 0) != 0) continue;
+      const size_t slash = line.find('/', 11);
+      if (line.find(" Group") != std::string::npos && slash > line.find(' ')) ++groups;
+      if (line.find(" Dataset") != std::string::npos && slash < line.find(' ') &&
+          line.find("/meshes") == std::string::npos)
+        ++datasets;
+    }
+    // Each snapshot 9 datasets; one being written when killed may be short of them.
+    EXPECT_GE(datasets, 9 * (groups - 1)) << "killed before write " << k << ":\n" << text;
+    most_snapshots = std::max(most_snapshots, groups);
+  }
+  EXPECT_GT(killed, 50);
+  EXPECT_GE(most_snapshots, 20);  // well past the 8 links HDF5 keeps in a header by default
 }
 
 }  // namespace
