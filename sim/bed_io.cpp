@@ -218,7 +218,7 @@ struct BedParticles {
 // Reads and checks the particles' ids, centres, radii and materials: ids ascending, radii > 0,
 // centres finite and inside the box [lo, hi] (the floor and side walls hold every particle of a
 // bed, so a centre outside them is a corrupt or foreign file; the top is open: a particle the
-// scoop flung may be above it), material indices into the names.
+// scoop flung may be above it, by up to the box's height), material indices into the names.
 BedParticles ReadParticles(const h5::Reader& in, const dem::Vec3& lo, const dem::Vec3& hi) {
   BedParticles bed;
   int64_t n = 0;
@@ -242,6 +242,15 @@ BedParticles ReadParticles(const h5::Reader& in, const dem::Vec3& lo, const dem:
       in.Fail("/particles/position",
               particle + ": expected a centre inside the scene's box " + Num(lo) + " .. " +
                   Num(hi) + " m (above its floor, between its side walls), got " + Num(c));
+    }
+    // Open, but not without end: a centre more than the box's height above its top is no
+    // particle a dig could have flung (one at 50 m made the scoop's approach start there and
+    // take 345 s of simulated time).
+    const double ceiling = hi.z + (hi.z - lo.z);
+    if (!(c.z <= ceiling)) {
+      in.Fail("/particles/position",
+              particle + ": expected a centre at most the box's height above its open top (z <= " +
+                  Num(ceiling) + " m), got " + Num(c));
     }
     const int32_t i = bed.material[k];
     if (i < 0 || static_cast<size_t>(i) >= bed.names.size()) {

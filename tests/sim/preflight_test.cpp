@@ -134,7 +134,8 @@ TEST(PreflightTest, BedFileWithNonFinitePositionIsRefused) {
 }
 
 // Defect: a bed file with particles outside the box was accepted. Its centres must lie between
-// the side walls and above the floor (the top is open: a particle the scoop flung may be above).
+// the side walls and above the floor, and at most the box's height above its open top (a particle
+// the scoop flung may be above it).
 TEST(PreflightTest, BedFileWithParticleOutsideTheBoxIsRefused) {
   for (const int axis : {0, 1, 2}) {
     const std::string bed = Bed("out.h5");
@@ -146,9 +147,18 @@ TEST(PreflightTest, BedFileWithParticleOutsideTheBoxIsRefused) {
         << e.what();
   }
   const std::string above = Bed("above.h5");
-  SetBedValue(above, "/particles/position", 9, 2, 0.5);
+  SetBedValue(above, "/particles/position", 9, 2, 0.35);  // 0.15 m above the 0.2 m box's top
   Scene scene = LoadScene(WriteScene("above.yaml", "above.h5"));
   EXPECT_NO_THROW(Preflight(&scene, Work::kRun));
+  // More than the box's height above its top (the defect: one at 50 m made the dig's approach
+  // start there, 345 s of simulated time).
+  const std::string far = Bed("far.h5");
+  SetBedValue(far, "/particles/position", 9, 2, 50.0);
+  const InputError e = Refusal(WriteScene("far.yaml", "far.h5"));
+  EXPECT_NE(std::string(e.what()).find("/particles/position: particle 9: expected a centre at "
+                                       "most the box's height above its open top (z <= 0.4 m)"),
+            std::string::npos)
+      << e.what();
 }
 
 // Defect: the time step came from the scene's bed.radius, not from the bed it loads (the same
