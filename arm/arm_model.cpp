@@ -5,6 +5,8 @@
 #include <urdf_parser/urdf_parser.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstddef>
@@ -55,11 +57,9 @@ namespace {
 class CaptureHandler : public console_bridge::OutputHandler {
  public:
   void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
-    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR && first_error.empty()) {
-      first_error = text;
-    }
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) errors.push_back(text);
   }
-  std::string first_error;
+  std::vector<std::string> errors;  // in the order urdfdom logged them
 };
 
 // Offset of the first `<tag ... name="name"` in the text, or std::string::npos.
@@ -308,9 +308,25 @@ ArmModel ParseArmModel(const std::string& urdf_text, const std::string& source,
     urdf = urdf::parseURDF(urdf_text);
     console_bridge::restorePreviousOutputHandler();
     if (!urdf) {
-      throw ArmModelError(
-          source + ": <robot>: expected a URDF (XML with one <robot> element), " +
-          "got: " + (capture.first_error.empty() ? "unparsable input" : capture.first_error));
+      const std::string got = capture.errors.empty() ? "unparsable input" : capture.errors[0];
+      // A structural error names the element at fault, as "joint [NAME]" or "link 'NAME'", in
+      // one of urdfdom's messages: the first such element the file has is the one reported.
+      static const std::regex named("\\b(joint|link)\\s*(?:\\[([^\\]]*)\\]|'([^']*)')",
+                                    std::regex::icase);
+      for (const std::string& error : capture.errors) {
+        for (std::sregex_iterator m(error.begin(), error.end(), named), end; m != end; ++m) {
+          std::string tag = (*m)[1].str();
+          std::transform(tag.begin(), tag.end(), tag.begin(),
+                         [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+          const std::string name = (*m)[(*m)[2].matched ? 2 : 3].str();
+          if (report.Line(tag, name) > 0) {
+            report.Fail(tag, name, tag + " '" + name + "'",
+                        "expected an element urdfdom can build into a URDF model, got: " + got);
+          }
+        }
+      }
+      throw ArmModelError(source + ": <robot>: expected a URDF (XML with one <robot> element), " +
+                          "got: " + got);
     }
   }
 

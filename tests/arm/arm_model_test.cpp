@@ -141,6 +141,30 @@ TEST(ArmModelTest, NotXml) {
   }
 }
 
+// urdfdom's structural errors carry no line: the element its message names is found in the file.
+TEST(ArmModelTest, JointToAMissingLinkNamesTheJointsLine) {
+  ExpectLoadError("missing_child.urdf",
+                  Edited("<child link=\"l_shou\"/>", "<child link=\"l_sho\"/>"),
+                  "<joint name=\"j_shou_yaw\"",
+                  "joint 'j_shou_yaw': expected an element urdfdom can build into a URDF model, "
+                  "got: Failed to build tree: child link [l_sho] of joint [j_shou_yaw] not found");
+}
+
+TEST(ArmModelTest, MalformedAxisNamesTheJointsLine) {
+  ExpectLoadError("short_axis.urdf", Edited("<axis xyz=\"0 0 -1\"/>", "<axis xyz=\"0 -1\"/>"),
+                  "<joint name=\"j_shou_yaw\"",
+                  "joint 'j_shou_yaw': expected an element urdfdom can build into a URDF model, "
+                  "got: Malformed axis element for joint [j_shou_yaw]",
+                  false);
+}
+
+TEST(ArmModelTest, DuplicateLinkNamesItsFirstLine) {
+  ExpectLoadError("duplicate_link.urdf", Edited("<link name=\"l_shou\">", "<link name=\"l_prox\">"),
+                  "<link name=\"l_prox\">",
+                  "link 'l_prox': expected an element urdfdom can build into a URDF model, got: "
+                  "link 'l_prox' is not unique.");
+}
+
 TEST(ArmModelTest, LinkWithoutInertialOnTheChain) {
   const std::string inertial =
       "    <inertial>\n      <origin xyz=\"0.16225 0 -0.10446\" rpy=\"0 0 0\"/>\n"
