@@ -334,6 +334,25 @@ double LargestWithin(const std::vector<SizeRow>& rows, bool spread) {
   return largest;
 }
 
+ToleranceCrossing CrossTolerance(const std::vector<SizeRow>& rows, double tolerance_pct) {
+  const auto cross = [&](double SizeRow::*mpe) {
+    for (size_t k = 1; k < rows.size(); ++k) {
+      const double a = std::abs(rows[k - 1].*mpe), b = std::abs(rows[k].*mpe);
+      if (!(b > tolerance_pct)) continue;
+      const double d0 = rows[k - 1].size_mm, d1 = rows[k].size_mm;
+      return d0 + (tolerance_pct - a) / (b - a) * (d1 - d0);  // a <= tol < b
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  };
+  ToleranceCrossing c;
+  c.force_mm = cross(&SizeRow::mpe_force_pct);
+  c.torque_mm = cross(&SizeRow::mpe_torque_pct);
+  c.mm = std::isnan(c.force_mm)    ? c.torque_mm
+         : std::isnan(c.torque_mm) ? c.force_mm
+                                   : std::min(c.force_mm, c.torque_mm);
+  return c;
+}
+
 std::string SizeCsvHeader() {
   return "size_mm,beds,peak_force_mean,peak_force_min,peak_force_max,mpe_force_pct,"
          "mpe_force_min_pct,mpe_force_max_pct,peak_torque_mean,peak_torque_min,peak_torque_max,"

@@ -128,6 +128,18 @@ std::vector<SizeRow> ReadSizeRows(const std::string& path, const std::string& sc
 // bed means (spread false) or by every bed (spread true). The reference always counts.
 double LargestWithin(const std::vector<SizeRow>& rows, bool spread);
 
+// Where |MPE| reaches the tolerance between the sizes run, for force and for torque: the first
+// size (from the reference up) with |MPE| above the tolerance, d1, and the size before it, d0,
+// give d* = d0 + (tol - |MPE(d0)|) / (|MPE(d1)| - |MPE(d0)|) x (d1 - d0), |MPE| linear in d
+// between them (bed means). NaN for a quantity that is within at every size run. `mm` is the
+// smaller of the two: the largest diameter within for both, on that line. It is >= eq. 7's
+// verdict and below the next size run. The study's 3.5 mm is not one of its sizes S (eq. 5): it
+// lies between its 3.25 and 4 mm, a point of this kind.
+struct ToleranceCrossing {
+  double force_mm = 0, torque_mm = 0, mm = 0;
+};
+ToleranceCrossing CrossTolerance(const std::vector<SizeRow>& rows, double tolerance_pct);
+
 // The CSV's header line (no newline): size_mm,beds,peak_force_mean,...,within_20,cpu_s_mean.
 std::string SizeCsvHeader();
 // One CSV line of a row (no newline).

@@ -146,6 +146,8 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
   rows = ScoreSizes(std::move(rows), kTolerancePct);
   const double verdict = LargestWithin(rows, false);
   const double verdict_spread = LargestWithin(rows, true);
+  const ToleranceCrossing crossing = CrossTolerance(rows, kTolerancePct);
+  const auto mm = [](double d) { return std::isnan(d) ? std::string("none") : Number(d); };
   const SizeRow& ref = rows.front();
   const auto from_prior = [&](double d) {
     return std::find(sizes.begin(), sizes.end(), d) == sizes.end();
@@ -174,6 +176,11 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
            "too\n"
         << "# verdict: largest_within_20pct_mm=" << Number(verdict) << "\n"
         << "# verdict_spread: largest_within_20pct_all_beds_mm=" << Number(verdict_spread) << "\n"
+        << "# crossing: mpe_20pct_mm=" << mm(crossing.mm) << " (force " << mm(crossing.force_mm)
+        << ", torque " << mm(crossing.torque_mm)
+        << "): where |mpe| reaches 20, linear in d between the last size within and the first "
+           "beyond (bed means; none: within at every size run); the study's 3.5 mm lies between "
+           "its sizes 3.25 and 4\n"
         << "# cpu_s_mean: CPU seconds of a case (pour + dig, all threads), mean over its beds\n";
     for (const std::string& n : prior_notes) {
       out << "# prior: " << n
@@ -229,6 +236,10 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
       "\nverdict (eq. 7): largest size within 20%%: %g mm (every bed within: %g mm); the "
       "study found 3.5 mm\n",
       verdict, verdict_spread);
+  std::printf(
+      "where |MPE| reaches 20%% (linear in d between the sizes around it): %s mm (force %s, "
+      "torque %s)\n",
+      mm(crossing.mm).c_str(), mm(crossing.force_mm).c_str(), mm(crossing.torque_mm).c_str());
   for (const std::string& n : prior_notes) std::printf("prior: %s\n", n.c_str());
   std::printf("scoopsim: wrote %s, %s\n", csv.c_str(), curves.c_str());
   std::fflush(stdout);

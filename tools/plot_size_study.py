@@ -16,7 +16,9 @@ figure only, drawn open):
   DIR/size_stack.png  Fig. 4 analogue: the same bed-mean curves in 3-D, over rho and diameter
   DIR/size_mpe.png    Fig. 6 analogue: MPE of the peak |F| (top) and |T| (bottom) against the
                       diameter, bed mean (dots) with the beds' min-max (error bars), the +-20%
-                      lines, the eq. 7 verdict marked (red ring and dotted line)
+                      lines, the eq. 7 verdict marked (red ring and dotted line), where
+                      |MPE| reaches 20% between the sizes (orange cross, from the CSV's
+                      '# crossing:' line where it has one) and the study's 3.5 mm (dash-dot)
 Exit 2 with one line on stderr for a missing or malformed file. Needs python3-numpy and
 python3-matplotlib.
 """
@@ -33,6 +35,7 @@ STUDY_COLUMNS = ("size_mm", "beds", "peak_force_mean", "peak_force_min", "peak_f
                  "mpe_force_pct", "mpe_force_min_pct", "mpe_force_max_pct", "peak_torque_mean",
                  "peak_torque_min", "peak_torque_max", "mpe_torque_pct", "mpe_torque_min_pct",
                  "mpe_torque_max_pct", "within_20", "cpu_s_mean")
+STUDY_SIZE_MM = 3.5  # the study's largest converged snow particle (section 4, Fig. 6)
 CURVE_COLUMNS = ("size_mm", "bed", "time", "rho", "force", "torque", "force_smooth",
                  "torque_smooth")
 
@@ -76,6 +79,14 @@ def main():
             raise ValueError("%s: expected a line '# verdict: largest_within_20pct_mm=D'"
                              % os.path.join(d, "size_study.csv"))
         verdict = float(verdict.group(1))
+        # `# crossing: mpe_20pct_mm=D (force F, torque T)`: where |MPE| reaches 20% between the
+        # sizes (none: within at every size); optional (earlier studies' CSVs lack it).
+        crossing = {}
+        for n in notes:
+            for key in ("force", "torque"):
+                m = re.match(r"crossing: .*\b%s ([0-9.eE+-]+)" % key, n)
+                if m:
+                    crossing[key] = float(m.group(1))
         prior = set()
         for n in notes:
             m = re.match(r"prior: sizes_mm=([0-9.eE+,-]+)", n)
@@ -165,9 +176,14 @@ def main():
             ax.axhline(y, color="red", ls="--", lw=1)
         ax.axhline(0, color="0.6", lw=0.6)
         ax.axvline(verdict, color="red", ls=":", lw=1)
+        if key in crossing:
+            ax.plot([crossing[key]], [20], "x", ms=10, mew=2, color="darkorange",
+                    label="|MPE| = 20%% (linear in d): %.3g mm" % crossing[key])
+        ax.axvline(STUDY_SIZE_MM, color="0.3", ls="-.", lw=1,
+                   label="the study's verdict: %g mm" % STUDY_SIZE_MM)
+        ax.legend(loc="best", fontsize=8)
         ax.set_ylabel(what)
         ax.grid(alpha=0.3)
-    axes[0].legend(loc="best", fontsize=8)
     axes[1].set_xlabel("particle diameter [mm]")
     axes[1].set_xticks(sizes)
     fig.suptitle("Particle size: maximum percent error against %g mm (eq. 6), 20%% tolerance "

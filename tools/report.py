@@ -309,9 +309,10 @@ def size_section(rep):
                                    "".join(" --prior " + p for p in priors))]
     # `# verdict: largest_within_20pct_mm=<d>` (bed means) and `# verdict_spread:
     # largest_within_20pct_all_beds_mm=<d>` (every bed), each against the study's 3.5 mm.
-    verdicts = [n for n in notes if n.lower().startswith("verdict")]
+    # `# crossing: mpe_20pct_mm=<d> (...)`: where |MPE| reaches 20% between the sizes run.
+    verdicts = [n for n in notes if n.lower().startswith(("verdict", "crossing"))]
     for v in verdicts:
-        m = re.search(r"largest_within_20pct\w*_mm\s*=\s*([^\s,;]+)", v)
+        m = re.search(r"(?:largest_within_20pct\w*|mpe_20pct)_mm\s*=\s*([^\s,;]+)", v)
         text = esc(v)
         try:
             d = float(m.group(1)) if m else float("nan")

@@ -367,6 +367,8 @@ TEST(SizeStudyTest, TwoSizesTwoBedsEndToEnd) {
 
   const std::string csv = scoopsim_test::ReadText(dir / "size_study.csv");
   EXPECT_NE(csv.find("\n# verdict: largest_within_20pct_mm="), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\n# crossing: mpe_20pct_mm="), std::string::npos) << csv;
+  EXPECT_NE(printed.find("where |MPE| reaches 20% (linear in d"), std::string::npos) << printed;
   EXPECT_NE(csv.find("\n# smoothing: centred moving mean over 0.05 s"), std::string::npos) << csv;
   EXPECT_NE(csv.find("\n# reference: the finest size, 5 mm"), std::string::npos) << csv;
   std::vector<std::vector<double>> rows;

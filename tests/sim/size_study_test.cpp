@@ -289,6 +289,27 @@ TEST(SizeStudyMpeTest, EquationSevenLargestConvergedSize) {
   EXPECT_EQ(sim::LargestWithin({Row(2, 0, 0), Row(3, -21, 0)}, false), 2);
 }
 
+// The 20% crossing: |MPE| linear in d between the last size within and the first beyond.
+// Force: 4 mm at 16, 5 mm at 36 -> 4 + (20 - 16) / (36 - 16) x 1 = 4.2 mm. Torque: first
+// beyond at 6 mm (29), the size before it 5 mm (-19: |MPE| 19) -> 5 + (20 - 19) / (29 - 19) x 1
+// = 5.1 mm. Both: the smaller, 4.2 mm. (Relative 1e-12.)
+TEST(SizeStudyMpeTest, ToleranceCrossingInterpolatesInDiameter) {
+  const std::vector<sim::SizeRow> rows = {Row(2, 0, 0), Row(4, 16, -10), Row(5, 36, -19),
+                                          Row(6, 50, 29)};
+  const sim::ToleranceCrossing c = sim::CrossTolerance(rows, 20);
+  EXPECT_NEAR(c.force_mm, 4.2, 4.2e-12);
+  EXPECT_NEAR(c.torque_mm, 5.1, 5.1e-12);
+  EXPECT_NEAR(c.mm, 4.2, 4.2e-12);
+  // The crossing is never below eq. 7's verdict, and below the next size.
+  EXPECT_GE(c.mm, sim::LargestWithin(rows, false));
+  // Within at every size: none (NaN); one quantity within everywhere: the other's crossing.
+  EXPECT_TRUE(std::isnan(sim::CrossTolerance({Row(2, 0, 0), Row(3, 20, -20)}, 20).mm));
+  const sim::ToleranceCrossing t = sim::CrossTolerance({Row(2, 0, 0), Row(3, 10, 30)}, 20);
+  EXPECT_TRUE(std::isnan(t.force_mm));
+  EXPECT_NEAR(t.torque_mm, 2 + 20.0 / 30.0, 1e-12);
+  EXPECT_EQ(t.mm, t.torque_mm);
+}
+
 TEST(SizeStudyMpeTest, ReferenceWithoutForceIsRefused) {
   EXPECT_THROW(sim::SummarizeSizes({{2, 1, 0, 1, 0}, {4, 1, 3, 1, 0}}, 20), std::invalid_argument);
   EXPECT_THROW(sim::SummarizeSizes({}, 20), std::invalid_argument);

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """tools/plot_size_study.py on synthetic files of `scoopsim study particle-size`'s layout (three
-sizes, two beds each): writes the three PNGs, also when a '# prior:' line names a size that has no
-curves (an earlier run's row); a folder without the files, a CSV with another header, rows that are
+sizes, two beds each, a '# crossing:' line): writes the three PNGs, also when a '# prior:' line
+names a size that has no curves (an earlier run's row); a folder without the files, a CSV with another header, rows that are
 not numbers, no verdict line, or a size with neither curves nor a prior line: one line, exit 2."""
 
 import os
@@ -26,6 +26,9 @@ def write_study(d, header=STUDY, verdict=True, rows=None, prior=None):
             f.write("# prior: sizes_mm=%s from old/size_study.csv (its rows: ...)\n" % prior)
         if verdict:
             f.write("# verdict: largest_within_20pct_mm=4\n")
+            # where |MPE| reaches 20 between 4 and 6 mm: 4 + (20 - 15) / (40 - 15) x 2 = 4.4 mm
+            # (force), 4 + 5 / 35 x 2 = 4.29 mm (torque); drawn where the line is given
+            f.write("# crossing: mpe_20pct_mm=4.28571 (force 4.4, torque 4.28571): where ...\n")
         f.write(header + "\n")
         for row in rows or (
                 "2,2,10,9,11,0,-10,10,1,0.9,1.1,0,-10,10,1,60",

@@ -7,7 +7,8 @@ report.sh draws the lookup figures and trends). Checks:
   - the page lists 9 figures and embeds each as a data URI whose bytes are the file's; every src
     is a data URI (nothing fetched);
   - the shape table's numbers, the size verdicts against the study's 3.5 mm (4 mm: coarser; with
-    the spread 2 mm: finer) and the command the CSV records (its scene), the
+    the spread 2 mm: finer; the 20% crossing, 4 + (20 - 10) / (50 - 10) x 6 = 5.5 mm: coarser)
+    and the command the CSV records (its scene), the
     Balovnev table's last row (the mean over the rows that cut: dem_horizontal = time, cut for
     time in [0.2, 0.8) at 0.02 s -> mean 0.49 exactly) and 10 span rows, the lookup ratio (10);
   - headless Chromium loads the page and every <img> has naturalWidth > 0 (an inline script added
@@ -84,6 +85,7 @@ def write_size(d):
         f.write("# scoopsim study particle-size scenes/paper/size_S2.yaml (scoopsim 0.1.0): paper "
                 "section 4, eq. 5-7\n# verdict: largest_within_20pct_mm=4\n"
                 "# verdict_spread: largest_within_20pct_all_beds_mm=2\n"
+                "# crossing: mpe_20pct_mm=5.5 (force 5.5, torque 5.5): where |mpe| reaches 20\n"
                 "# prior: sizes_mm=10 from old/size_study.csv (its rows: peaks, beds, cost)\n"
                 "size_mm,beds,peak_force_mean,peak_force_min,peak_force_max,mpe_force_pct,"
                 "mpe_force_min_pct,mpe_force_max_pct,peak_torque_mean,peak_torque_min,"
@@ -198,6 +200,8 @@ def main():
         size = page[page.index('id="size"'):page.index('id="balovnev"')]
         assert "largest_within_20pct_mm=4 &mdash; 4 mm, coarser than the study" in size, size
         assert "all_beds_mm=2 &mdash; 2 mm, finer than the study" in size, size
+        assert "mpe_20pct_mm=5.5 (force 5.5" in size and "5.5 mm, coarser than the study" in \
+            size, size
         assert "<pre>build/scoopsim study particle-size scenes/paper/size_S2.yaml -o " + \
             os.path.join(root, "size") + " --prior old/size_study.csv</pre>" in size, \
             "the recorded command, with the earlier run's rows it took"
