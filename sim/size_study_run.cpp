@@ -110,7 +110,7 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
                  SizeSweepText(fs::absolute(scene_path).lexically_normal().string(), cases));
   const Sweep sweep = LoadSweep(sweep_file.string());
   if (options.list) {
-    std::fputs(SweepCaseList(sweep).c_str(), stdout);
+    std::fputs(SweepCaseList(sweep, options.dir).c_str(), stdout);
     return kExitOk;
   }
   SweepOptions sweep_options;

@@ -442,7 +442,7 @@ Sweep LoadSweep(const std::string& path) {
   return sweep;
 }
 
-std::string SweepCaseList(const Sweep& sweep) {
+std::string SweepCaseList(const Sweep& sweep, const std::string& dir) {
   std::string text;
   for (const SweepCase& c : sweep.cases) {
     std::string settings;
@@ -450,7 +450,9 @@ std::string SweepCaseList(const Sweep& sweep) {
       settings += (settings.empty() ? "" : ", ") + s.key + " = " + s.value;
     char cost[32];
     std::snprintf(cost, sizeof cost, "%.3g", c.estimate);
-    text += std::to_string(c.index) + "\t" + c.name + "\t" + settings + "\t" + cost + "\n";
+    text += std::to_string(c.index) + "\t" + c.name + "\t" + settings + "\t" + cost;
+    if (!dir.empty()) text += "\t" + CaseState(c, dir);
+    text += "\n";
   }
   return text;
 }
@@ -724,6 +726,35 @@ bool CaseDone(const SweepCase& c, const std::string& dir) {
   } catch (const InputError&) {
     return false;
   }
+}
+
+std::string StateOf(const SweepCase& c, const std::string& dir) {
+  const CasePaths paths = PathsOf(c, dir);
+  const CaseStatus s = ReadCaseStatus(paths.status.string());
+  if (s.state.empty()) return "not started";
+  if (s.scene_hash != TextHash(c.scene.yaml_text)) return "made from another scene text";
+  if (s.state == "done") return fs::exists(paths.h5) ? "done" : "done, but its file is missing";
+  if (s.state == "failed")
+    return "failed (exit " + std::to_string(s.exit_status) + "): " + s.message;
+  // Where it stands: the pour (RunCase's records name it "making the bed", and "the bed" when it
+  // stopped there), else the pass after those done.
+  char where[160];
+  if (s.message == "making the bed" || s.message == "the bed")
+    std::snprintf(where, sizeof where, "the pour, %.1f CPU s so far", s.bed_cpu_s);
+  else
+    std::snprintf(where, sizeof where, "pass %d of %d, %.1f CPU s so far", s.passes_done + 1,
+                  s.passes, s.bed_cpu_s + s.pass_cpu_s);
+  if (s.state == "running") {
+    // Held by a live process, or left by one that was killed (flock dies with its holder).
+    const int fd = ::open(paths.lock.c_str(), O_RDONLY);
+    const bool held = fd >= 0 && ::flock(fd, LOCK_SH | LOCK_NB) != 0;
+    if (fd >= 0) ::close(fd);
+    if (held) return std::string("running (another process holds its lock): ") + where;
+    return std::string("killed: ") + where + " (the same command goes on from its last keep)";
+  }
+  if (s.state == "stopped")
+    return std::string("stopped: ") + where + " (kept: the same command goes on)";
+  return s.state + ": " + where;
 }
 
 CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& options,
@@ -1023,6 +1054,8 @@ int FinishTable(const Sweep& sweep, const SweepOptions& options) {
 }
 
 }  // namespace sweep
+
+std::string CaseState(const SweepCase& c, const std::string& dir) { return sweep::StateOf(c, dir); }
 
 // ---------------------------------------------------------------------------------------------
 // The plain runner

@@ -90,8 +90,18 @@ struct Sweep {
 Sweep LoadSweep(const std::string& path);
 
 // The cases as `scoopsim sweep --list` prints them: a line each, tab-separated: index, name,
-// settings ("key = value, ..."), estimated cost.
-std::string SweepCaseList(const Sweep& sweep);
+// settings ("key = value, ..."), estimated cost and, with an output folder `dir`, where the case
+// stands there (CaseState).
+std::string SweepCaseList(const Sweep& sweep, const std::string& dir = "");
+
+// Where a case stands in the output folder `dir`, from its status record and lock, in words:
+// "not started"; "done"; "running (another process holds DIR/cases/NAME.lock): the pour" or
+// ": pass k of n"; "stopped: ..." (by a signal, kept: the same command goes on); "killed: ..."
+// (the record says running but no process holds the lock: the same command goes on from the last
+// keep); "failed (exit E): message"; "made from another scene text" when its record's hash is not
+// the case's. Running, stopped and killed add the CPU seconds so far (the pour's, and the running
+// pass's up to its last keep).
+std::string CaseState(const SweepCase& c, const std::string& dir);
 
 struct SweepOptions {
   std::string dir = "out/sweep";

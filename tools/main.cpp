@@ -375,7 +375,8 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(tools::FiniteNonNegative("s"));
   size->add_flag("--list", size_options.list,
-                 "Print the cases (index, name, settings, cost) and exit");
+                 "Print the cases (index, name, settings, cost, where each stands in DIR) "
+                 "and exit");
   size->add_flag("--no-plot", size_no_plot, "Do not draw DIR/size_*.png");
   size->add_flag("-q,--quiet", size_options.quiet, "No progress line within a case");
 

@@ -34,7 +34,9 @@ void SweepCommands::AddTo(CLI::App* app) {
                    "(a stopped case then restarts its pass, or its pour)")
       ->capture_default_str()
       ->check(FiniteNonNegative("s"));
-  sweep_->add_flag("--list", list_, "Print the cases (index, name, settings, cost) and exit");
+  sweep_->add_flag("--list", list_,
+                   "Print the cases (index, name, settings, cost, where each stands in the output "
+                   "folder) and exit");
   sweep_->add_flag("--no-table", no_table_, "Do not build DIR/table.h5 at the end");
   sweep_->add_flag("-q,--quiet", sweep_options_.quiet, "No progress line within a case");
 
@@ -99,7 +101,7 @@ int SweepCommands::Run() {
     }
     const sim::Sweep sweep = sim::LoadSweep(sweep_file_);
     if (list_) {
-      std::fputs(sim::SweepCaseList(sweep).c_str(), stdout);
+      std::fputs(sim::SweepCaseList(sweep, sweep_options_.dir).c_str(), stdout);
       return 0;
     }
     sim::SweepOptions options = sweep_options_;

@@ -5,9 +5,12 @@
 // same table and case rows, bit for bit.
 #include "sim/sweep.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <hdf5.h>
+#include <sys/file.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <csignal>
@@ -202,6 +205,62 @@ TEST(SweepFileTest, CommandLineExitsTwo) {
   EXPECT_EQ(
       scoopsim_test::RunScoopsim("sweep " + kTiny + " --case 4 -o " + (TempDir() / "x").string()),
       2);
+}
+
+// `--list`'s last column (sim::CaseState) from records written here, one per state; no DEM. A
+// running case whose lock another open file holds is running; one whose lock nobody holds was
+// killed (flock dies with its holder).
+TEST(SweepFileTest, ListSaysWhereEachCaseStands) {
+  const sim::Sweep sweep = sim::LoadSweep(kTiny);
+  ASSERT_EQ(sweep.cases.size(), 4u);
+  const fs::path dir = TempDir() / "list";
+  fs::create_directories(dir / "cases");
+  const auto record = [&](int k, const std::string& state, const std::string& message) {
+    sim::CaseStatus s;
+    s.state = state;
+    s.index = k;
+    s.passes = 2;
+    s.passes_done = state == "stopped" ? 1 : 0;
+    s.scene_hash = sim::TextHash(sweep.cases[k].scene.yaml_text);
+    s.exit_status = state == "failed" ? 3 : 0;
+    s.bed_cpu_s = 12.25;
+    s.pass_cpu_s = 5;
+    s.message = message;
+    sim::WriteCaseStatus((dir / "cases" / (sweep.cases[k].name + ".status")).string(), s);
+  };
+  const auto state = [&](int k) { return sim::CaseState(sweep.cases[k], dir.string()); };
+  EXPECT_EQ(state(0), "not started");
+  record(0, "done", "");
+  EXPECT_EQ(state(0), "done, but its file is missing");
+  std::ofstream(dir / "cases" / (sweep.cases[0].name + ".h5")) << "x";
+  EXPECT_EQ(state(0), "done");
+  record(1, "stopped", "pass 2 did not finish");
+  EXPECT_EQ(state(1), "stopped: pass 2 of 2, 17.2 CPU s so far (kept: the same command goes on)");
+  record(2, "running", "making the bed");
+  EXPECT_EQ(state(2),
+            "killed: the pour, 12.2 CPU s so far (the same command goes on from its last keep)");
+  {
+    const std::string lock = (dir / "cases" / (sweep.cases[2].name + ".lock")).string();
+    const int fd = ::open(lock.c_str(), O_RDWR | O_CREAT, 0644);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+    EXPECT_EQ(state(2), "running (another process holds its lock): the pour, 12.2 CPU s so far");
+    ::close(fd);
+  }
+  record(3, "failed", "the box holds only 10 of bed.count = 20 particles");
+  EXPECT_EQ(state(3), "failed (exit 3): the box holds only 10 of bed.count = 20 particles");
+  // Another scene text: the case's own record, not this one's.
+  record(3, "done", "");
+  sim::CaseStatus other =
+      sim::ReadCaseStatus((dir / "cases" / (sweep.cases[3].name + ".status")).string());
+  other.scene_hash = "0123456789abcdef";
+  sim::WriteCaseStatus((dir / "cases" / (sweep.cases[3].name + ".status")).string(), other);
+  EXPECT_EQ(state(3), "made from another scene text");
+  // The list: the state is the fifth column with a folder, absent without one.
+  const std::string with = sim::SweepCaseList(sweep, dir.string());
+  EXPECT_NE(with.find("\t1.79e+08\tdone\n"), std::string::npos) << with;
+  const std::string without = sim::SweepCaseList(sweep);
+  EXPECT_EQ(without.find("done"), std::string::npos) << without;
 }
 
 TEST(SweepFileTest, StatusRecordRoundTrips) {
