@@ -740,10 +740,10 @@ std::string StateOf(const SweepCase& c, const std::string& dir) {
   // stopped there), else the pass after those done.
   char where[160];
   if (s.message == "making the bed" || s.message == "the bed")
-    std::snprintf(where, sizeof where, "the pour, %.1f CPU s so far", s.bed_cpu_s);
+    std::snprintf(where, sizeof where, "the pour, %.1f CPU s to its last keep", s.bed_cpu_s);
   else
-    std::snprintf(where, sizeof where, "pass %d of %d, %.1f CPU s so far", s.passes_done + 1,
-                  s.passes, s.bed_cpu_s + s.pass_cpu_s);
+    std::snprintf(where, sizeof where, "pass %d of %d, %.1f CPU s in it to its last keep",
+                  s.passes_done + 1, s.passes, s.pass_cpu_s);
   if (s.state == "running") {
     // Held by a live process, or left by one that was killed (flock dies with its holder).
     const int fd = ::open(paths.lock.c_str(), O_RDONLY);

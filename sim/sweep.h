@@ -99,8 +99,8 @@ std::string SweepCaseList(const Sweep& sweep, const std::string& dir = "");
 // ": pass k of n"; "stopped: ..." (by a signal, kept: the same command goes on); "killed: ..."
 // (the record says running but no process holds the lock: the same command goes on from the last
 // keep); "failed (exit E): message"; "made from another scene text" when its record's hash is not
-// the case's. Running, stopped and killed add the CPU seconds so far (the pour's, and the running
-// pass's up to its last keep).
+// the case's. Running, stopped and killed add the CPU seconds of the pour or of the running pass
+// up to its last keep.
 std::string CaseState(const SweepCase& c, const std::string& dir);
 
 struct SweepOptions {

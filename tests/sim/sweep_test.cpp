@@ -235,16 +235,20 @@ TEST(SweepFileTest, ListSaysWhereEachCaseStands) {
   std::ofstream(dir / "cases" / (sweep.cases[0].name + ".h5")) << "x";
   EXPECT_EQ(state(0), "done");
   record(1, "stopped", "pass 2 did not finish");
-  EXPECT_EQ(state(1), "stopped: pass 2 of 2, 17.2 CPU s so far (kept: the same command goes on)");
+  EXPECT_EQ(
+      state(1),
+      "stopped: pass 2 of 2, 5.0 CPU s in it to its last keep (kept: the same command goes on)");
   record(2, "running", "making the bed");
   EXPECT_EQ(state(2),
-            "killed: the pour, 12.2 CPU s so far (the same command goes on from its last keep)");
+            "killed: the pour, 12.2 CPU s to its last keep (the same command goes on from its last "
+            "keep)");
   {
     const std::string lock = (dir / "cases" / (sweep.cases[2].name + ".lock")).string();
     const int fd = ::open(lock.c_str(), O_RDWR | O_CREAT, 0644);
     ASSERT_GE(fd, 0);
     ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
-    EXPECT_EQ(state(2), "running (another process holds its lock): the pour, 12.2 CPU s so far");
+    EXPECT_EQ(state(2),
+              "running (another process holds its lock): the pour, 12.2 CPU s to its last keep");
     ::close(fd);
   }
   record(3, "failed", "the box holds only 10 of bed.count = 20 particles");
