@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """tools/plot_size_study.py on synthetic files of `scoopsim study particle-size`'s layout (three
 sizes, two beds each, a '# crossing:' line): writes the three PNGs, also when a '# prior:' line
-names a size that has no curves (an earlier run's row); a folder without the files, a CSV with another header, rows that are
-not numbers, no verdict line, or a size with neither curves nor a prior line: one line, exit 2."""
+names a size that has no curves (an earlier run's row); a folder without the files, a CSV with
+another header, rows that are not numbers, no verdict line, or a size with neither curves nor a
+prior line: one line, exit 2."""
 
 import os
 import subprocess
