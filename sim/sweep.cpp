@@ -698,6 +698,11 @@ void MergeParts(const SweepCase& c, const CasePaths& paths, double bed_cpu_s) {
   fs::rename(tmp, paths.h5);
 }
 
+// The status record's message while a case pours its bed, and when the pour ended it (stopped or
+// failed); StateOf reads them back.
+constexpr const char* kPouring = "making the bed";
+constexpr const char* kPourEnded = "the bed";
+
 // Holds an exclusive lock on the case (flock on DIR/cases/<name>.lock) while it runs, so that
 // two processes never run one case at once (a job array resubmitted while it still runs).
 class CaseLock {
@@ -736,20 +741,17 @@ std::string StateOf(const SweepCase& c, const std::string& dir) {
   if (s.state == "done") return fs::exists(paths.h5) ? "done" : "done, but its file is missing";
   if (s.state == "failed")
     return "failed (exit " + std::to_string(s.exit_status) + "): " + s.message;
-  // Where it stands: the pour (RunCase's records name it "making the bed", and "the bed" when it
-  // stopped there), else the pass after those done.
+  // Where it stands: the pour (RunCase's records name it so), else the pass after those done.
   char where[160];
-  if (s.message == "making the bed" || s.message == "the bed")
+  if (s.message == kPouring || s.message == kPourEnded)
     std::snprintf(where, sizeof where, "the pour, %.1f CPU s to its last keep", s.bed_cpu_s);
   else
     std::snprintf(where, sizeof where, "pass %d of %d, %.1f CPU s in it to its last keep",
                   s.passes_done + 1, s.passes, s.pass_cpu_s);
   if (s.state == "running") {
     // Held by a live process, or left by one that was killed (flock dies with its holder).
-    const int fd = ::open(paths.lock.c_str(), O_RDONLY);
-    const bool held = fd >= 0 && ::flock(fd, LOCK_SH | LOCK_NB) != 0;
-    if (fd >= 0) ::close(fd);
-    if (held) return std::string("running (another process holds its lock): ") + where;
+    if (!CaseLock(paths.lock).locked())
+      return std::string("running (another process holds its lock): ") + where;
     return std::string("killed: ") + where + " (the same command goes on from its last keep)";
   }
   if (s.state == "stopped")
@@ -850,14 +852,14 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& 
             every > 0 && ReadPourPoint(paths.Pour().string(), scene.yaml_text, &kept);
         const double cpu_before = goes_on ? status.bed_cpu_s : 0.0;
         status.bed_cpu_s = cpu_before;
-        record("running", 0, "making the bed");
+        record("running", 0, kPouring);
         const double cpu0 = CpuSeconds();
         World world(scene, threads);
         if (every > 0) {
           const KillHook kill = KillAfter(c, 0);
           world.KeepPour(paths.Pour().string(), every, [&] {
             status.bed_cpu_s = cpu_before + (CpuSeconds() - cpu0);
-            record("running", 0, "making the bed");
+            record("running", 0, kPouring);
             // (Once: the keep written when stopped calls this again, and a second SIGTERM
             // is the user's "now".)
             if (kill.after > 0 && world.system().time() >= kill.after && !StopRequested())
@@ -867,7 +869,7 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& 
         SettleReport report;
         const int settled = world.Pour(quiet, &report);
         if (settled != kExitOk) {
-          record(settled == kExitStopped ? "stopped" : "failed", settled, "the bed");
+          record(settled == kExitStopped ? "stopped" : "failed", settled, kPourEnded);
           outcome.exit_status = settled;
           outcome.wall = elapsed();
           return outcome;

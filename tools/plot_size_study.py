@@ -35,7 +35,6 @@ STUDY_COLUMNS = ("size_mm", "beds", "peak_force_mean", "peak_force_min", "peak_f
                  "mpe_force_pct", "mpe_force_min_pct", "mpe_force_max_pct", "peak_torque_mean",
                  "peak_torque_min", "peak_torque_max", "mpe_torque_pct", "mpe_torque_min_pct",
                  "mpe_torque_max_pct", "within_20", "cpu_s_mean")
-STUDY_SIZE_MM = 3.5  # the study's largest converged snow particle (section 4, Fig. 6)
 CURVE_COLUMNS = ("size_mm", "bed", "time", "rho", "force", "torque", "force_smooth",
                  "torque_smooth")
 
@@ -179,8 +178,8 @@ def main():
         if key in crossing:
             ax.plot([crossing[key]], [20], "x", ms=10, mew=2, color="darkorange",
                     label="|MPE| = 20%% (linear in d): %.3g mm" % crossing[key])
-        ax.axvline(STUDY_SIZE_MM, color="0.3", ls="-.", lw=1,
-                   label="the study's verdict: %g mm" % STUDY_SIZE_MM)
+        ax.axvline(study_csv.STUDY_SIZE_MM, color="0.3", ls="-.", lw=1,
+                   label="the study's verdict: %g mm" % study_csv.STUDY_SIZE_MM)
         ax.legend(loc="best", fontsize=8)
         ax.set_ylabel(what)
         ax.grid(alpha=0.3)

@@ -43,9 +43,9 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from study_csv import STUDY_SIZE_MM  # noqa: E402  (after the path it is found on)
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-STUDY_SIZE_MM = 3.5  # the study's largest converged snow particle (section 4)
 STUDY_SHAPE_HOURS = {"tetra1": 2.25, "tetra4": 2.3, "tetra8": 5, "tetra12": 33}  # its Table 3
 
 # The default command of each section (DIR stands for the results folder).

@@ -1,7 +1,11 @@
 """Reading the CSV files the studies write ('#' note lines, a header, rows of numbers), shared by
-the plotting scripts (tools/plot_balovnev.py, tools/plot_size_study.py). Errors are ValueError
-with one line naming the file, for the caller to print and exit 2."""
+the plotting scripts (tools/plot_balovnev.py, tools/plot_size_study.py) and tools/report.py.
+Errors are ValueError with one line naming the file, for the caller to print and exit 2."""
 import numpy as np
+
+# The reference study's largest converged snow particle (section 4, Fig. 6, eq. 7), which the
+# particle-size plot and the report set ours beside.
+STUDY_SIZE_MM = 3.5
 
 
 def read(path, columns, min_rows=1):
