@@ -1,6 +1,7 @@
 """Reading the CSV files the studies write ('#' note lines, a header, rows of numbers), shared by
-the plotting scripts (tools/plot_balovnev.py, tools/plot_size_study.py) and tools/report.py.
-Errors are ValueError with one line naming the file, for the caller to print and exit 2."""
+the plotting scripts (tools/plot_balovnev.py, tools/plot_size_study.py); also the study's own
+particle-size verdict, which tools/report.py shows too. Errors are ValueError with one line
+naming the file, for the caller to print and exit 2."""
 import numpy as np
 
 # The reference study's largest converged snow particle (section 4, Fig. 6, eq. 7), which the
