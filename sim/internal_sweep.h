@@ -15,6 +15,8 @@ namespace sim::sweep {
 struct CaseOutcome {
   int exit_status = 0;   // sim::ExitStatus
   bool skipped = false;  // already done: nothing ran
+  bool held = false;     // another process holds its lock (runs it): left to that process, not
+                         // a failure unless this run was asked for this case alone (--case)
   double wall = 0;       // [s] of this attempt
   int first_pass = 1;    // the pass this attempt began with (> 1: resumed)
 };
@@ -36,6 +38,7 @@ class Log {
   void Started(const SweepCase& c, int rank, int threads);
   void Finished(const SweepCase& c, int rank, const CaseOutcome& outcome);
   void Skipped(const SweepCase& c);
+  void Held(const SweepCase& c);  // left to the process that holds its lock
 
  private:
   const Sweep& sweep_;

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -705,11 +706,17 @@ constexpr const char* kPourEnded = "the bed";
 
 // Holds an exclusive lock on the case (flock on DIR/cases/<name>.lock) while it runs, so that
 // two processes never run one case at once (a job array resubmitted while it still runs).
+// With `wait`, waits for the lock (the table's build: two processes that end at once build it
+// one after the other).
 class CaseLock {
  public:
-  explicit CaseLock(const fs::path& path) {
+  explicit CaseLock(const fs::path& path, bool wait = false) {
     fd_ = ::open(path.c_str(), O_RDWR | O_CREAT, 0644);
-    locked_ = fd_ >= 0 && ::flock(fd_, LOCK_EX | LOCK_NB) == 0;
+    if (fd_ < 0) return;
+    int rc;
+    while ((rc = ::flock(fd_, wait ? LOCK_EX : LOCK_EX | LOCK_NB)) != 0 && errno == EINTR) {
+    }
+    locked_ = rc == 0;
   }
   ~CaseLock() {
     if (fd_ >= 0) ::close(fd_);  // releases the lock
@@ -780,9 +787,15 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& 
     fs::create_directories(paths.parts.parent_path());
     CaseLock lock(paths.lock);
     if (!lock.locked()) {
-      Status("scoopsim: sweep: case %s is being run by another process (%s is locked)\n",
-             c.name.c_str(), paths.lock.c_str());
-      outcome.exit_status = kExitFailure;
+      // Another process runs it (two plain sweeps on one folder, a job array beside a plain
+      // sweep): left to that one, whose own end builds the table if its case is the last. Asked
+      // for this case alone (--case), this run did not do what it was asked: a failure.
+      outcome.held = true;
+      if (options.only_case >= 0) {
+        Status("scoopsim: sweep: case %s is being run by another process (%s is locked)\n",
+               c.name.c_str(), paths.lock.c_str());
+        outcome.exit_status = kExitFailure;
+      }
       return outcome;
     }
     Scene scene = c.scene;
@@ -1014,6 +1027,15 @@ void Log::Skipped(const SweepCase& c) {
          c.name.c_str());
 }
 
+void Log::Held(const SweepCase& c) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  skipped_cost_ += c.estimate;  // not this run's work: out of its ETA
+  Status(
+      "scoopsim: sweep: [%d/%zu] %s left to another process (it holds cases/%s.lock); the "
+      "process that finishes the last case builds the table\n",
+      c.index, sweep_.cases.size(), c.name.c_str(), c.name.c_str());
+}
+
 void Log::Finished(const SweepCase& c, int rank, const CaseOutcome& outcome) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (outcome.exit_status == kExitStopped) {
@@ -1046,6 +1068,8 @@ int FinishTable(const Sweep& sweep, const SweepOptions& options) {
   if (!options.build_table && !options.on_complete) return kExitOk;
   for (const SweepCase& c : sweep.cases)
     if (!CaseDone(c, options.dir)) return kExitOk;  // another process's cases are still running
+  // Two processes on one folder may both find every case done: one builds at a time.
+  const CaseLock lock(fs::path(options.dir) / "table.lock", /*wait=*/true);
   if (options.build_table) {
     const std::string table = (fs::path(options.dir) / "table.h5").string();
     const std::string summary = BuildWrenchTable(options.dir, table);
@@ -1083,7 +1107,9 @@ int RunSweep(const Sweep& sweep, const SweepOptions& options) {
     const int threads = options.threads >= 0 ? options.threads : c.scene.threads;
     log.Started(c, 0, threads);
     const sweep::CaseOutcome outcome = sweep::RunCase(sweep, c, options, threads);
-    if (outcome.skipped) {
+    if (outcome.held) {
+      log.Held(c);
+    } else if (outcome.skipped) {
       log.Skipped(c);
     } else {
       log.Finished(c, 0, outcome);

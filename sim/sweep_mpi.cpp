@@ -5,8 +5,9 @@
 // its own World on `threads` threads (1 unless --threads says otherwise): a case's output is the
 // same whoever runs it. At the end rank 0 builds DIR/table.h5.
 //
-// Messages: a worker sends kTagReport {case index or -1, exit status, wall, skipped} (its last
-// case's outcome; -1 for none) and receives kTagAssign {case index, or -1: no more work}.
+// Messages: a worker sends kTagReport {case index or -1, exit status, wall, 1 skipped / 2 held by
+// another process / 0} (its last case's outcome; -1 for none) and receives kTagAssign {case index,
+// or -1: no more work}.
 #include <mpi.h>
 
 #include <algorithm>
@@ -53,7 +54,7 @@ int Worker(const Sweep& sweep, const SweepOptions& options, int rank, int thread
     report[0] = index;
     report[1] = outcome.exit_status;
     report[2] = outcome.wall;
-    report[3] = outcome.skipped ? 1 : 0;
+    report[3] = outcome.skipped ? 1 : (outcome.held ? 2 : 0);
     if (outcome.exit_status != kExitOk && exit_status == kExitOk) exit_status = outcome.exit_status;
   }
   (void)rank;
@@ -66,7 +67,9 @@ int Dispatcher(const Sweep& sweep, const SweepOptions& options, int ranks, int t
   std::deque<int> queue = Queue(sweep, options.dir, &log);
   int exit_status = kExitOk;
   const auto note = [&](const SweepCase& c, int rank, const CaseOutcome& outcome) {
-    if (outcome.skipped) {
+    if (outcome.held) {
+      log.Held(c);
+    } else if (outcome.skipped) {
       log.Skipped(c);
     } else {
       log.Finished(c, rank, outcome);
@@ -133,7 +136,8 @@ int Dispatcher(const Sweep& sweep, const SweepOptions& options, int ranks, int t
         CaseOutcome outcome;
         outcome.exit_status = static_cast<int>(report[1]);
         outcome.wall = report[2];
-        outcome.skipped = report[3] != 0;
+        outcome.skipped = report[3] == 1;
+        outcome.held = report[3] == 2;
         note(sweep.cases[static_cast<int>(report[0])], status.MPI_SOURCE, outcome);
       }
       int index = next(status.MPI_SOURCE);

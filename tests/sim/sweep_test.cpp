@@ -359,6 +359,16 @@ const char* const kCases[] = {"snow_b5", "snow_b10", "ice_b5", "ice_b10"};
 // One test, so that the plain sweep (the reference) runs once: ctest runs every test of this
 // file in a process of its own. Cases run on one thread (the DEM gives the same bits on any
 // count); the MPI ranks get one each.
+// The tiny sweep on 2 MPI ranks into `dir`, its output in `log`: the raw std::system status.
+int MpiSweep(const fs::path& dir, const std::string& log) {
+  const std::string cmd =
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+      "OMPI_MCA_rmaps_base_oversubscribe=1 " +
+      std::string(SCOOPSIM_MPIEXEC) + " -np 2 --oversubscribe " + SCOOPSIM_BINARY + " sweep " +
+      kTiny + " -o " + dir.string() + " -q >" + log + " 2>&1";
+  return std::system(cmd.c_str());
+}
+
 TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
   const fs::path plain = TempDir() / "plain";
   const std::string log = (TempDir() / "plain.log").string();
@@ -399,12 +409,7 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
     SCOPED_TRACE("mpirun -np 2");
     const fs::path mpi = TempDir() / "mpi";
     const std::string mpi_log = (TempDir() / "mpi.log").string();
-    const std::string cmd =
-        "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-        "OMPI_MCA_rmaps_base_oversubscribe=1 " +
-        std::string(SCOOPSIM_MPIEXEC) + " -np 2 --oversubscribe " + SCOOPSIM_BINARY + " sweep " +
-        kTiny + " -o " + mpi.string() + " -q >" + mpi_log + " 2>&1";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadText(mpi_log);
+    ASSERT_EQ(MpiSweep(mpi, mpi_log), 0) << ReadText(mpi_log);
     const std::string mpi_text = ReadText(mpi_log);
     EXPECT_NE(mpi_text.find("on 2 MPI ranks"), std::string::npos) << mpi_text;
     EXPECT_NE(mpi_text.find("(rank 1)"), std::string::npos) << mpi_text;
@@ -428,6 +433,61 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
     EXPECT_EQ(files, (std::vector<std::string>{"ice_b5.h5", "ice_b5.lock", "ice_b5.status"}));
     EXPECT_FALSE(fs::exists(one / "table.h5"));
     ExpectSameData(plain / "cases" / "ice_b5.h5", one / "cases" / "ice_b5.h5", "sweep");
+  }
+  {
+    SCOPED_TRACE("a case another process holds");
+    // Three cases done (copied); this test holds snow_b10's lock, as a second sweep on the same
+    // folder running it would. A plain sweep leaves that case to it: exit 0, no FAILED, and no
+    // table, since not every case is done. --case on the held case fails (exit 1). When the
+    // holder has finished (its files copied, its lock released), a sweep builds the table.
+    const fs::path shared = TempDir() / "shared";
+    fs::create_directories(shared / "cases");
+    for (const char* name : {"snow_b5", "ice_b5", "ice_b10"}) {
+      for (const char* ext : {".h5", ".status"}) {
+        fs::copy_file(plain / "cases" / (std::string(name) + ext),
+                      shared / "cases" / (std::string(name) + ext));
+      }
+    }
+    const std::string lock = (shared / "cases" / "snow_b10.lock").string();
+    const int fd = ::open(lock.c_str(), O_RDWR | O_CREAT, 0644);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+    const std::string held_log = (TempDir() / "held.log").string();
+    EXPECT_EQ(
+        scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + shared.string() + " -q", held_log),
+        0)
+        << ReadText(held_log);
+    const std::string text = ReadText(held_log);
+    EXPECT_NE(text.find("[1/4] snow_b10 left to another process (it holds cases/snow_b10.lock)"),
+              std::string::npos)
+        << text;
+    EXPECT_EQ(text.find("FAILED"), std::string::npos) << text;
+    EXPECT_EQ(text.find("snow_b10 done"), std::string::npos) << text;
+    EXPECT_FALSE(fs::exists(shared / "cases" / "snow_b10.status"));  // untouched: not its case
+    EXPECT_FALSE(fs::exists(shared / "table.h5"));
+    const std::string one_log = (TempDir() / "held_one.log").string();
+    EXPECT_EQ(scoopsim_test::RunScoopsim(
+                  "sweep " + kTiny + " --case 1 -o " + shared.string() + " -q", one_log),
+              1);
+    EXPECT_NE(ReadText(one_log).find("case snow_b10 is being run by another process"),
+              std::string::npos)
+        << ReadText(one_log);
+    {
+      SCOPED_TRACE("mpirun -np 2, the case held");
+      const std::string mpi_log = (TempDir() / "held_mpi.log").string();
+      // Not its log's last line: mpirun's forwarding at times drops a rank's last line at exit.
+      EXPECT_EQ(MpiSweep(shared, mpi_log), 0) << ReadText(mpi_log);
+      EXPECT_EQ(ReadText(mpi_log).find("FAILED"), std::string::npos) << ReadText(mpi_log);
+      EXPECT_FALSE(fs::exists(shared / "cases" / "snow_b10.status"));
+      EXPECT_FALSE(fs::exists(shared / "table.h5"));
+    }
+    for (const char* ext : {".h5", ".status"}) {
+      fs::copy_file(plain / "cases" / (std::string("snow_b10") + ext),
+                    shared / "cases" / (std::string("snow_b10") + ext));
+    }
+    ::close(fd);
+    EXPECT_EQ(scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + shared.string() + " -q"), 0);
+    ExpectSameData(plain / "table.h5", shared / "table.h5");
   }
   // Three cases done already (copied), then the sweep is SIGKILLed `kill` into snow_b10 with
   // checkpoints every `every` seconds of wall time, then resumed: the same table and rows.
