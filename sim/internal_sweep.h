@@ -15,8 +15,8 @@ namespace sim::sweep {
 struct CaseOutcome {
   int exit_status = 0;   // sim::ExitStatus
   bool skipped = false;  // already done: nothing ran
-  bool held = false;     // another process holds its lock (runs it): left to that process, not
-                         // a failure unless this run was asked for this case alone (--case)
+  bool held = false;     // another process holds its lock (runs it): left to that process,
+                         // not a failure (with --case that is a failure instead: exit_status)
   double wall = 0;       // [s] of this attempt
   int first_pass = 1;    // the pass this attempt began with (> 1: resumed)
 };

@@ -790,12 +790,13 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& 
       // Another process runs it (two plain sweeps on one folder, a job array beside a plain
       // sweep): left to that one, whose own end builds the table if its case is the last. Asked
       // for this case alone (--case), this run did not do what it was asked: a failure.
-      outcome.held = true;
-      if (options.only_case >= 0) {
-        Status("scoopsim: sweep: case %s is being run by another process (%s is locked)\n",
-               c.name.c_str(), paths.lock.c_str());
-        outcome.exit_status = kExitFailure;
+      if (options.only_case < 0) {
+        outcome.held = true;
+        return outcome;
       }
+      Status("scoopsim: sweep: case %s is being run by another process (%s is locked)\n",
+             c.name.c_str(), paths.lock.c_str());
+      outcome.exit_status = kExitFailure;
       return outcome;
     }
     Scene scene = c.scene;

@@ -46,6 +46,17 @@ std::string ReadText(const fs::path& path) {
 }
 
 // A sweep file in the temporary folder over scenes/sweeps/tiny_scene.yaml.
+// Takes the exclusive flock that a process running a case holds on its lock file `path` (made if
+// missing): the descriptor, or -1 when the lock cannot be had. Closing it releases the lock.
+int HoldLock(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT, 0644);
+  if (fd >= 0 && ::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
 std::string WriteSweep(const std::string& name, const std::string& body) {
   const fs::path path = TempDir() / name;
   std::ofstream(path) << "scene: " << kSourceDir << "/scenes/sweeps/tiny_scene.yaml\n" << body;
@@ -244,9 +255,8 @@ TEST(SweepFileTest, ListSaysWhereEachCaseStands) {
             "keep)");
   {
     const std::string lock = (dir / "cases" / (sweep.cases[2].name + ".lock")).string();
-    const int fd = ::open(lock.c_str(), O_RDWR | O_CREAT, 0644);
+    const int fd = HoldLock(lock);
     ASSERT_GE(fd, 0);
-    ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
     EXPECT_EQ(state(2),
               "running (another process holds its lock): the pour, 12.2 CPU s to its last keep");
     ::close(fd);
@@ -359,6 +369,13 @@ const char* const kCases[] = {"snow_b5", "snow_b10", "ice_b5", "ice_b10"};
 // One test, so that the plain sweep (the reference) runs once: ctest runs every test of this
 // file in a process of its own. Cases run on one thread (the DEM gives the same bits on any
 // count); the MPI ranks get one each.
+// Copies case `name`'s file and status record from `from`/cases into `to`/cases, as a sweep that
+// finished it there would have left them.
+void CopyCase(const fs::path& from, const fs::path& to, const std::string& name) {
+  for (const char* ext : {".h5", ".status"})
+    fs::copy_file(from / "cases" / (name + ext), to / "cases" / (name + ext));
+}
+
 // The tiny sweep on 2 MPI ranks into `dir`, its output in `log`: the raw std::system status.
 int MpiSweep(const fs::path& dir, const std::string& log) {
   const std::string cmd =
@@ -442,16 +459,10 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
     // holder has finished (its files copied, its lock released), a sweep builds the table.
     const fs::path shared = TempDir() / "shared";
     fs::create_directories(shared / "cases");
-    for (const char* name : {"snow_b5", "ice_b5", "ice_b10"}) {
-      for (const char* ext : {".h5", ".status"}) {
-        fs::copy_file(plain / "cases" / (std::string(name) + ext),
-                      shared / "cases" / (std::string(name) + ext));
-      }
-    }
+    for (const char* name : {"snow_b5", "ice_b5", "ice_b10"}) CopyCase(plain, shared, name);
     const std::string lock = (shared / "cases" / "snow_b10.lock").string();
-    const int fd = ::open(lock.c_str(), O_RDWR | O_CREAT, 0644);
+    const int fd = HoldLock(lock);
     ASSERT_GE(fd, 0);
-    ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
     const std::string held_log = (TempDir() / "held.log").string();
     EXPECT_EQ(
         scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + shared.string() + " -q", held_log),
@@ -481,10 +492,7 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
       EXPECT_FALSE(fs::exists(shared / "cases" / "snow_b10.status"));
       EXPECT_FALSE(fs::exists(shared / "table.h5"));
     }
-    for (const char* ext : {".h5", ".status"}) {
-      fs::copy_file(plain / "cases" / (std::string("snow_b10") + ext),
-                    shared / "cases" / (std::string("snow_b10") + ext));
-    }
+    CopyCase(plain, shared, "snow_b10");
     ::close(fd);
     EXPECT_EQ(scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + shared.string() + " -q"), 0);
     ExpectSameData(plain / "table.h5", shared / "table.h5");
@@ -496,12 +504,7 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
                                    const std::string& every, const auto& while_killed) {
     const fs::path resumed = TempDir() / folder;
     fs::create_directories(resumed / "cases");
-    for (const char* name : {"snow_b5", "ice_b5", "ice_b10"}) {
-      for (const char* ext : {".h5", ".status"}) {
-        fs::copy_file(plain / "cases" / (std::string(name) + ext),
-                      resumed / "cases" / (std::string(name) + ext));
-      }
-    }
+    for (const char* name : {"snow_b5", "ice_b5", "ice_b10"}) CopyCase(plain, resumed, name);
     const std::string killed_log = (TempDir() / (folder + ".killed.log")).string();
     const std::string cmd = "SCOOPSIM_SWEEP_KILL=snow_b10:" + kill + " " +
                             std::string(SCOOPSIM_BINARY) + " sweep " + kTiny + " -o " +
