@@ -21,7 +21,8 @@
 namespace sim {
 
 // 2 (2026-12-03): the workspace keeps the force pass's slab weights instead of its slab order.
-constexpr int kCheckpointFormat = 2;
+// 3 (2026-12-06): the dig keeps the CoM's path length since first touch (/scoop/rho_path).
+constexpr int kCheckpointFormat = 3;
 
 struct Checkpoint {
   std::string scene_path, scene_yaml;

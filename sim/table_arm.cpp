@@ -74,12 +74,18 @@ dem::MeshWrench TableWrench::At(const dem::Pose& pose) {
       if (dem::Apply(pose, v).z <= floor_) {
         touched_ = true;
         along0_ = dem::Dot(com_, trench_);
+        com_last_ = com_;
         break;
       }
     }
     if (!touched_) return w;
   }
-  rho_ = std::max(rho_, dem::Dot(com_, trench_) - along0_);
+  if (table_.rho_definition() == RhoDefinition::kPath) {
+    rho_ += dem::Norm(com_ - com_last_);
+    com_last_ = com_;
+  } else {
+    rho_ = std::max(rho_, dem::Dot(com_, trench_) - along0_);
+  }
   if (rho_ > rho_end_) ++held_steps_;
   // Material, bite depth and pass were checked at construction: with clamp, Query cannot throw.
   scoop_wrench_ = table_.Query(material_, bite_depth_mm_, pass_, rho_ * 1e3, /*clamp=*/true);

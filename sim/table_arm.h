@@ -15,12 +15,13 @@
 //
 // The wrench (TableWrench), per pass p: Query(bed.material, dig.bite_depth in mm, p, rho), the
 // table's l_scoop-frame wrench about the CoM, turned into world axes and taken about the l_scoop
-// origin (what Feedback expects, as dem::MeshWrench); rho as the table defines it: the running
-// maximum of the CoM's horizontal displacement along the trench (the dig's heading) since first
-// contact. First contact has no particles to detect it: it is the first step at which a vertex
-// of the scoop mesh is at or below the floor the pass meets, surface - (p - 1) x bite_depth (the
-// original surface for pass 1, the previous pass's cut after; a start_buried pass touches at
-// once). Before it the wrench is zero.
+// origin (what Feedback expects, as dem::MeshWrench); rho as the table defines it (its
+// rho_definition) since first contact: the length of the CoM's path (path), or the running
+// maximum of the CoM's horizontal displacement along the trench, the dig's heading (along). First
+// contact has no particles to detect it: it is the first step at which a vertex of the scoop mesh
+// is at or below the floor the pass meets, surface - (p - 1) x bite_depth (the original surface for
+// pass 1, the previous pass's cut after; a start_buried pass touches at once). Before it the wrench
+// is zero.
 //
 // Out of the table's domain: what can be checked before the run is refused there, with one line
 // naming the table file (InputError, exit 2): a material, a pass or a bite depth the table does
@@ -78,6 +79,7 @@ class TableWrench {
   double floor_ = 0;  // z of first contact in this pass [m]
   bool touched_ = false;
   double along0_ = 0, rho_ = 0;  // CoM along the trench at first contact; rho [m]
+  dem::Vec3 com_last_;           // CoM at the last step (rho as a path length) [m]
   double rho_end_ = 0;           // end of this pass's data (the slower of the cells) [m]
   dem::Vec3 com_;
   std::array<double, 6> scoop_wrench_{};

@@ -29,6 +29,8 @@ struct World::Dig {
   bool touched = false;   // the scoop has touched a particle in this pass
   dem::Vec3 com_contact;  // CoM at first touch [m]
   double rho = 0;         // CoM travel along the trench since first touch [m]
+  double rho_path = 0;    // CoM path length since first touch [m] (the study's rho)
+  dem::Vec3 com_last;     // CoM at the last step, for rho_path [m]
   ScoopWrench wrench;     // of the last step
   double force_sum = 0;   // |F| over the rows after first contact, for the mean [N]
   int64_t force_rows = 0;
@@ -197,6 +199,8 @@ void World::LoopFields(Archive& a) {
   a(d.touched);
   a(d.com_contact);
   a(d.rho);
+  a(d.rho_path);
+  a(d.com_last);
   a(d.wrench);
   a(d.force_sum);
   a(d.force_rows);
@@ -324,6 +328,7 @@ void World::BeginPass() {
   dig.pass_t0 = system_->time();
   dig.next_row = dig.pass_t0;
   dig.rho = 0;
+  dig.rho_path = 0;
   dig.touched = false;
   system_->SetMeshMotion(dig.mesh, dig.driver->MotionAt(0.0));
 }
@@ -390,6 +395,7 @@ void World::RecordDigRow() {
   out_->AppendRow("/scoop/time", &t, 1);
   out_->AppendRow("/scoop/pass", &pass, 1);
   out_->AppendRow("/scoop/rho", &dig.rho, 1);
+  out_->AppendRow("/scoop/rho_path", &dig.rho_path, 1);
   Row3(out_, "/scoop/force_body", w.force_body);
   Row3(out_, "/scoop/torque_body", w.torque_body);
   Row3(out_, "/scoop/force_scoop", w.force_scoop);
@@ -484,13 +490,22 @@ void World::Record() {
     const dem::Pose& pose = system.mesh_motion(dig.mesh).pose;
     dig.wrench = ComputeScoopWrench(mw, pose, dig.com_scoop, dig.body);
     const dem::Vec3 com = dem::Apply(pose, dig.com_scoop);
-    // rho (paper Figs. 9-11): horizontal displacement of the CoM along the trench since the
-    // scoop first touched a particle in this pass.
+    // Two measures of the distance since the scoop first touched a particle in this pass:
+    // rho_path, the length of the CoM's path (paper eq. 1's rho, "the relative distance covered
+    // along the trench since the first contact", 0-450 mm for the Table 4 path, whose CoM path
+    // is 442 mm; ARCHITECTURE "The table's rho"), summed step by step as chords (a 30 deg/s
+    // arc of 45 mm radius differs from its chords by < 1e-9 of its length at dt = 1e-5 s); and
+    // rho, the CoM's displacement along the trench (390 mm for that path).
     if (!dig.touched && mw.contacts > 0) {
       dig.touched = true;
       dig.com_contact = com;
+      dig.com_last = com;
     }
-    if (dig.touched) dig.rho = dem::Dot(com - dig.com_contact, dig.trench);
+    if (dig.touched) {
+      dig.rho = dem::Dot(com - dig.com_contact, dig.trench);
+      dig.rho_path += dem::Norm(com - dig.com_last);
+      dig.com_last = com;
+    }
     if (system.time() >= dig.next_row) {
       dig.next_row += scene_.dig.interval;
       RecordDigRow();

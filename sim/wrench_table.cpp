@@ -81,7 +81,7 @@ struct CaseRows {
   std::vector<std::array<double, 12>> wrench;
 };
 
-CaseRows ReadCase(const fs::path& path) {
+CaseRows ReadCase(const fs::path& path, RhoDefinition rho) {
   CaseRows c;
   c.file = path.string();
   c.name = path.stem().string();
@@ -93,7 +93,13 @@ CaseRows ReadCase(const fs::path& path) {
   int64_t n = 0;
   r.Read<double>("/scoop/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1, &n);
   c.pass = r.Read<double>("/scoop/pass", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
-  c.rho = r.Read<double>("/scoop/rho", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
+  const char* rho_name = rho == RhoDefinition::kPath ? "/scoop/rho_path" : "/scoop/rho";
+  if (!r.Exists(rho_name)) {
+    r.Fail(rho_name,
+           "missing (a run made before 2026-12-06 records only /scoop/rho: run the "
+           "case again, or build with --rho along)");
+  }
+  c.rho = r.Read<double>(rho_name, H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
   c.contacts = r.Read<double>("/scoop/contacts", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
   c.wrench.resize(static_cast<size_t>(n));
   for (int s = 0; s < 4; ++s) {
@@ -197,6 +203,10 @@ std::vector<double> ReadNd(const h5::Reader& r, const std::string& name,
 
 }  // namespace
 
+const char* RhoDefinitionName(RhoDefinition d) {
+  return d == RhoDefinition::kPath ? "path" : "along";
+}
+
 int LanderMaterialId(const std::string& name) {
   if (name == "snow") return 1;
   if (name == "ice") return 2;
@@ -240,7 +250,7 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
     throw InputError(cases_dir.string() +
                      ": expected the case files of a sweep (<name>.h5), found none");
   std::vector<CaseRows> cases;
-  for (const fs::path& f : files) cases.push_back(ReadCase(f));
+  for (const fs::path& f : files) cases.push_back(ReadCase(f, options.rho));
 
   // The axes: materials by lander id (then name), bite depths ascending, passes 1..P.
   std::vector<std::string> materials;
@@ -313,6 +323,7 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
     h5::WriteDoubleAttribute(f, "rho_step", options.rho_step_mm / 1e3);
     h5::WriteDoubleAttribute(f, "rho_max", rho.back());
     h5::WriteStringAttribute(f, "units", "SI: force N, torque N m, bite_depth m, rho m");
+    h5::WriteStringAttribute(f, "rho_definition", RhoDefinitionName(options.rho));
     h5::WriteStringAttribute(
         f, "frames",
         "about the scoop's centre of mass; *_body: the study's body frame (X along the rotation "
@@ -374,6 +385,12 @@ WrenchTable::WrenchTable(const std::string& path) : path_(path) {
   passes_ = r.Read<int>("/pass", H5T_INTEGER, H5T_NATIVE_INT, -1, 1);
   rho_ = r.Read<double>("/rho", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1);
   rho_step_ = r.ReadDoubleAttribute("/", "rho_step");
+  if (r.HasAttribute("/", "rho_definition")) {
+    const std::string d = r.ReadStringAttribute("/", "rho_definition");
+    if (d != "path" && d != "along")
+      r.Fail("attribute rho_definition", "expected path or along, got " + d);
+    rho_definition_ = d == "path" ? RhoDefinition::kPath : RhoDefinition::kAlong;
+  }
   const hsize_t B = bite_depths_.size(), P = passes_.size(), R = rho_.size();
   if (M == 0 || B == 0 || P == 0 || R == 0) r.Fail("/", "an empty table");
   force_body_ = ReadNd(r, "/scoop/force_body", {M, B, P, R, 3});

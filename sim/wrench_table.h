@@ -47,9 +47,17 @@ namespace sim {
 // (the table's /materials/id and the export say which).
 int LanderMaterialId(const std::string& name);  // 0 when it has no fixed id
 
+// What rho measures, from the scoop's first contact in the pass: kPath the length of the path
+// of the scoop's CoM (/scoop/rho_path; the study's and the lander's table's rho), kAlong the
+// CoM's displacement along the trench (/scoop/rho). ARCHITECTURE "The table's rho" gives the
+// evidence for kPath.
+enum class RhoDefinition { kPath, kAlong };
+const char* RhoDefinitionName(RhoDefinition d);  // "path" or "along"
+
 struct WrenchTableOptions {
-  double rho_step_mm = 1;   // grid step [mm]
+  double rho_step_mm = 2;   // grid step [mm] (the lander's table: ~2 mm)
   double rho_max_mm = 450;  // grid end [mm]
+  RhoDefinition rho = RhoDefinition::kPath;
 };
 
 // `scoopsim table build DIR -o TABLE.h5`: the table of every DIR/cases/*.h5 (a run's output with
@@ -95,7 +103,8 @@ class WrenchTable {
   const std::vector<double>& bite_depths() const { return bite_depths_; }  // [m]
   const std::vector<int>& passes() const { return passes_; }
   const std::vector<double>& rho() const { return rho_; }  // [m]
-  double rho_step() const { return rho_step_; }            // [m]
+  RhoDefinition rho_definition() const { return rho_definition_; }
+  double rho_step() const { return rho_step_; }  // [m]
   // The stored sample of cell (m, b, p) at grid node r: the six components in `frame`.
   std::array<double, 6> Sample(int m, int b, int p, int r, Frame frame = Frame::kScoop) const;
   double RhoEnd(int m, int b, int p) const;  // [m]; NaN when the cell has no data
@@ -111,8 +120,9 @@ class WrenchTable {
   std::vector<int> material_ids_;
   std::vector<double> bite_depths_;  // [m]
   std::vector<int> passes_;
-  std::vector<double> rho_;                                                    // [m]
-  double rho_step_ = 0;                                                        // [m]
+  std::vector<double> rho_;                               // [m]
+  double rho_step_ = 0;                                   // [m]
+  RhoDefinition rho_definition_ = RhoDefinition::kAlong;  // tables before 2026-12-06: along
   std::vector<double> force_body_, torque_body_, force_scoop_, torque_scoop_;  // M*B*P*R*3
   std::vector<double> rho_end_;                                                // M*B*P
 };

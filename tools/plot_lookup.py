@@ -4,8 +4,8 @@
     tools/plot_lookup.py TABLE.h5 -o DIR [--cases SWEEP_DIR] [--frame body|scoop] [--smooth W]
 
 TABLE.h5 is `scoopsim table build`'s (sim/wrench_table.h: material x bite depth x pass x rho).
-Writes, each panel against rho in mm (the scoop CoM's travel along the trench since the pass's
-first contact), drawn by tools/plot_wrench.py's plot (|F| and |T| on top, the force and torque
+Writes, each panel against rho in mm (as the table measures it, its rho_definition: the length
+of the scoop CoM's path since the pass's first contact, or its travel along the trench), drawn by tools/plot_wrench.py's plot (|F| and |T| on top, the force and torque
 components of --frame below, raw thin and smoothed thick over --smooth grid nodes):
   DIR/lookup_fig9.png    ice, bite depth 15 mm, passes 1-5 (the study's Fig. 9)
   DIR/lookup_fig10.png   ice and snow, 15 mm, passes 1 and 5 (Fig. 10)
@@ -87,6 +87,10 @@ def read_table(path, frame):
             "torque": np.asarray(f["scoop/torque_" + frame][()], dtype=float),
             "cell_case": [text(v) for v in f["cells/case"][()]] if "cells/case" in f else [],
             "case_file": {},
+            # What rho measures (sim/wrench_table.h): path (the CoM's path length, the
+            # default since 2026-12-06) or along (its travel along the trench; older tables).
+            "rho_dataset": ("scoop/rho_path" if text(f.attrs.get("rho_definition", "along"))
+                            == "path" else "scoop/rho"),
         }
         if "cases/name" in f and "cases/file" in f:
             t["case_file"] = {text(n): text(p) for n, p in zip(f["cases/name"][()],
@@ -250,7 +254,7 @@ def case_segments(t, cases_dir, m, b, pass_, notes, what):
     try:
         with h5py.File(path, "r") as f:
             rows = np.rint(f["scoop/pass"][()]).astype(int) == pass_
-            rho_mm = 1e3 * np.asarray(f["scoop/rho"][()], dtype=float)[rows]
+            rho_mm = 1e3 * np.asarray(f[t["rho_dataset"]][()], dtype=float)[rows]
             pose = np.asarray(f["scoop/pose"][()], dtype=float)[rows]
     except (OSError, KeyError) as e:
         notes.append("%s: no segment marks (%s: %s; --cases names the sweep folder)"

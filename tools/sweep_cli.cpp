@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <map>
 
 #include "sim/commands.h"
 #include "sim/scene.h"
@@ -52,6 +53,14 @@ void SweepCommands::AddTo(CLI::App* app) {
   build_->add_option("--rho-max-mm", build_options_.rho_max_mm, "rho grid end [mm]")
       ->capture_default_str()
       ->check(FiniteNonNegative("mm"));
+  build_
+      ->add_option("--rho", build_options_.rho,
+                   "What rho measures from first contact: path (the length of the CoM's path, "
+                   "the study's and the lander's) or along (the CoM's displacement along the "
+                   "trench)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, sim::RhoDefinition>{
+          {"path", sim::RhoDefinition::kPath}, {"along", sim::RhoDefinition::kAlong}}))
+      ->default_str("path");
 
   query_ = table->add_subcommand(
       "query", "The wrench [Fx Fy Fz Tx Ty Tz] at one point (linear in bite depth and rho)");
@@ -60,7 +69,9 @@ void SweepCommands::AddTo(CLI::App* app) {
   query_->add_option("--bite-depth-mm", query_bite_depth_mm_, "Bite depth [mm]")->required();
   query_->add_option("--pass", query_pass_, "Pass (1-based)")->required();
   query_
-      ->add_option("--rho-mm", query_rho_mm_, "Distance along the trench since first contact [mm]")
+      ->add_option("--rho-mm", query_rho_mm_,
+                   "Distance since first contact [mm], as the table measures it (its "
+                   "rho_definition: path or along)")
       ->required();
   query_->add_flag("--clamp", query_clamp_,
                    "Clamp bite depth and rho into the table's range instead of failing");

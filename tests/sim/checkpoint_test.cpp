@@ -245,7 +245,7 @@ TEST(CheckpointTest, MismatchIsRefused) {
   H5Fclose(file);
   EXPECT_EQ(scoopsim_test::RunScoopsim("run --resume " + out + " -q", log), 2);
   text = ReadText(log);
-  EXPECT_EQ(text.find("scoopsim: " + restart + ": attribute format_version: expected 2, got 99"),
+  EXPECT_EQ(text.find("scoopsim: " + restart + ": attribute format_version: expected 3, got 99"),
             0u)
       << text;
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;

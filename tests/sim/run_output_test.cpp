@@ -95,10 +95,10 @@ void WaitForFile(const fs::path& path, pid_t pid) {
 }
 
 // The datasets compared between runs: every /scoop and /series row of a dig.
-const char* const kSeries[] = {"/scoop/time",           "/scoop/pass",        "/scoop/rho",
-                               "/scoop/pose",           "/scoop/force_world", "/scoop/torque_body",
-                               "/scoop/contacts",       "/series/time",       "/series/awake",
-                               "/series/kinetic_energy"};
+const char* const kSeries[] = {"/scoop/time",        "/scoop/pass",           "/scoop/rho",
+                               "/scoop/rho_path",    "/scoop/pose",           "/scoop/force_world",
+                               "/scoop/torque_body", "/scoop/contacts",       "/series/time",
+                               "/series/awake",      "/series/kinetic_energy"};
 
 // All values of a dataset of doubles and its row count; rows -1 when the file or the dataset
 // cannot be read with a plain read-only open.

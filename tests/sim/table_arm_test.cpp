@@ -81,7 +81,11 @@ std::string WriteTable(const std::string& name, const std::array<double, 6>& w0,
     out.Close();
   }
   const std::string table = (dir / "table.h5").string();
-  sim::BuildWrenchTable(dir.string(), table);
+  // The table of along-trench rho these tests check TableWrench's rho against (1 mm grid).
+  sim::WrenchTableOptions options;
+  options.rho_step_mm = 1;
+  options.rho = sim::RhoDefinition::kAlong;
+  sim::BuildWrenchTable(dir.string(), table, options);
   return table;
 }
 

@@ -54,6 +54,7 @@ void WriteCase(const fs::path& dir, const std::string& name, const std::string& 
     out.AppendRow("/scoop/time", &t, 1);
     out.AppendRow("/scoop/pass", &p, 1);
     out.AppendRow("/scoop/rho", &rho, 1);
+    out.AppendRow("/scoop/rho_path", &rho, 1);  // the same: these tests are of the resampling
     out.AppendRow("/scoop/contacts", &contacts, 1);
     const char* names[4] = {"/scoop/force_body", "/scoop/torque_body", "/scoop/force_scoop",
                             "/scoop/torque_scoop"};
@@ -82,7 +83,9 @@ class WrenchTableTest : public testing::Test {
     WriteCase(dir_, "ice_b5", "ice", 0.005);
     WriteCase(dir_, "ice_b10", "ice", 0.01);
     table_path_ = (dir_ / "table.h5").string();
-    sim::BuildWrenchTable(dir_.string(), table_path_);
+    sim::WrenchTableOptions options;
+    options.rho_step_mm = 1;  // a node every mm: node r is rho = r mm below
+    sim::BuildWrenchTable(dir_.string(), table_path_, options);
   }
   static fs::path dir_;
   static std::string table_path_;
@@ -99,6 +102,7 @@ TEST_F(WrenchTableTest, AxesFollowTheCases) {
   ASSERT_EQ(table.rho().size(), 451u);  // 0..450 mm every 1 mm
   EXPECT_EQ(table.rho()[120], 0.12);
   EXPECT_DOUBLE_EQ(table.rho_step(), 1e-3);
+  EXPECT_EQ(table.rho_definition(), sim::RhoDefinition::kPath);
   for (int m = 0; m < 2; ++m)
     for (int b = 0; b < 2; ++b)
       for (int p = 0; p < 2; ++p) EXPECT_EQ(table.RhoEnd(m, b, p), kRhoEnd);
@@ -243,7 +247,9 @@ TEST_F(WrenchTableTest, TwoCasesOfOneCellAreRefused) {
 // The CLI: build, query (exit 2 out of the domain), export-csv.
 TEST_F(WrenchTableTest, CommandLine) {
   const std::string table = (dir_ / "cli_table.h5").string();
-  ASSERT_EQ(scoopsim_test::RunScoopsim("table build " + dir_.string() + " -o " + table), 0);
+  ASSERT_EQ(scoopsim_test::RunScoopsim("table build " + dir_.string() + " -o " + table +
+                                       " --rho-step-mm 1"),
+            0);
   const std::string out = (dir_ / "query.json").string();
   const std::string cmd = std::string(SCOOPSIM_BINARY) + " table query " + table +
                           " --material snow --bite-depth-mm 10 --pass 2 --rho-mm 120 > " + out;
@@ -261,6 +267,96 @@ TEST_F(WrenchTableTest, CommandLine) {
                                        (dir_ / "cli.csv").string()),
             0);
   EXPECT_TRUE(fs::exists(dir_ / "cli.csv"));
+}
+
+// What rho measures, and the export's rows, on a hand-built case whose CoM goes down 10 mm
+// (blade first: along-trench travel 0), then round a quarter circle of radius R = 45 mm (along
+// R sin(phi), path R phi), then 100 mm straight along the trench; the wrench a + k path.
+// Closed forms: built by default (rho = the CoM's path length, grid every 2 mm, as the lander's
+// table) the table at node rho_k is a + k rho_k to 1e-12, and the CSV has exactly one row per
+// 2 mm node up to the path's end, rho = 0.002 k; built with --rho along, the node at x holds
+// the wrench where the CoM's along-trench travel was x: a + k path(x), path(x) = 10 mm +
+// R asin(x / R) on the arc and 10 mm + R pi / 2 + (x - R) after it (to 1e-6 N: rows every
+// 0.1 mm of path, linear between them).
+TEST(WrenchTableRho, PathByDefaultEvery2mmAndAlongOnRequest) {
+  const fs::path dir = scoopsim_test::ProcessTempDir("wrench_table_rho");
+  constexpr double kR = 0.045, kDrop = 0.01, kLine = 0.1, kA = 0.3, kK = 2.0;
+  const double arc = kR * M_PI / 2, path_end = kDrop + arc + kLine;
+  const auto path_of_along = [&](double x) {
+    return x <= kR ? kDrop + kR * std::asin(x / kR) : kDrop + arc + (x - kR);
+  };
+  {
+    const std::string scene =
+        "materials: materials.yaml\nbed: {material: snow, radius: 0.008, count: 10}\n"
+        "dig: {bite_depth: 0.005, passes: 1}\n";
+    sim::H5Output out((dir / "cases" / "snow_b5.h5").string(), scene, "test");
+    double t = 0;
+    const int n = static_cast<int>(std::lround(path_end / 1e-4));
+    for (int i = 0; i <= n; ++i) {
+      const double path = i * 1e-4, p = 1, contacts = 2;
+      double along = 0;
+      if (path > kDrop + arc) {
+        along = kR + (path - kDrop - arc);
+      } else if (path > kDrop) {
+        along = kR * std::sin((path - kDrop) / kR);
+      }
+      out.AppendRow("/scoop/time", &t, 1);
+      out.AppendRow("/scoop/pass", &p, 1);
+      out.AppendRow("/scoop/rho", &along, 1);
+      out.AppendRow("/scoop/rho_path", &path, 1);
+      out.AppendRow("/scoop/contacts", &contacts, 1);
+      const double w[3] = {kA + kK * path, 0, 0};
+      for (const char* name :
+           {"/scoop/force_body", "/scoop/torque_body", "/scoop/force_scoop", "/scoop/torque_scoop"})
+        out.AppendRow(name, w, 3);
+      t += 1e-3;
+    }
+    out.Close();
+  }
+  // Default: path, 2 mm.
+  const std::string path_table = (dir / "path.h5").string();
+  sim::BuildWrenchTable(dir.string(), path_table);
+  const WrenchTable by_path(path_table);
+  EXPECT_EQ(by_path.rho_definition(), sim::RhoDefinition::kPath);
+  EXPECT_DOUBLE_EQ(by_path.rho_step(), 2e-3);
+  ASSERT_EQ(by_path.rho().size(), 226u);
+  for (size_t r = 0; r < by_path.rho().size(); ++r) {
+    const double rho = by_path.rho()[r];
+    const double got = by_path.Sample(0, 0, 0, static_cast<int>(r))[0];
+    if (rho > by_path.RhoEnd(0, 0, 0)) {
+      EXPECT_TRUE(std::isnan(got)) << rho;
+    } else {
+      EXPECT_NEAR(got, kA + kK * rho, 1e-12) << rho;
+    }
+  }
+  const std::string csv = (dir / "path.csv").string();
+  by_path.ExportCsv(csv);
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  int rows = 0;
+  while (std::getline(in, line)) {
+    double m, d, p, rho, fx;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf", &m, &d, &p, &rho, &fx), 5) << line;
+    EXPECT_EQ(rho, rows * 2 / 1e3) << line;  // one row per 2 mm node, in order
+    EXPECT_NEAR(fx, kA + kK * rho, 1e-12) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, static_cast<int>(std::floor(path_end / 2e-3 + 1e-9)) + 1);
+  // On request: along the trench.
+  sim::WrenchTableOptions options;
+  options.rho = sim::RhoDefinition::kAlong;
+  const std::string along_table = (dir / "along.h5").string();
+  sim::BuildWrenchTable(dir.string(), along_table, options);
+  const WrenchTable by_along(along_table);
+  EXPECT_EQ(by_along.rho_definition(), sim::RhoDefinition::kAlong);
+  EXPECT_NEAR(by_along.RhoEnd(0, 0, 0), kR + kLine, 1e-4);  // the last row, within a row
+  for (size_t r = 1; r < by_along.rho().size(); ++r) {
+    const double x = by_along.rho()[r];
+    if (x > by_along.RhoEnd(0, 0, 0)) break;
+    EXPECT_NEAR(by_along.Sample(0, 0, 0, static_cast<int>(r))[0], kA + kK * path_of_along(x), 1e-6)
+        << x;
+  }
 }
 
 }  // namespace

@@ -41,6 +41,7 @@ def write_case(path, material, bite, passes=2, rows=60, seed=0):
         f["scoop/time"] = np.arange(n) * 1e-3
         f["scoop/pass"] = np.array(pass_col, float)
         f["scoop/rho"] = np.array(rho)
+        f["scoop/rho_path"] = np.array(rho)
         f["scoop/contacts"] = np.array(contacts, float)
         for name in ("force_body", "torque_body", "force_scoop", "torque_scoop"):
             f["scoop/" + name] = rng.normal(size=(n, 3))
