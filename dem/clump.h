@@ -74,6 +74,9 @@ PrincipalAxes ComputePrincipalAxes(const std::array<std::array<double, 3>, 3>& t
 
 // A template prepared for simulation: its mass properties per unit density and its spheres in
 // the principal frame (origin at the centre of mass).
+// Largest (max - min) / max of the principal moments of a shape taken for a spherical top.
+constexpr double kSphericalTopSpread = 1e-4;
+
 struct ClumpShape {
   ClumpTemplate source;
   double volume = 0;           // of the union of the spheres [m^3]
@@ -84,6 +87,10 @@ struct ClumpShape {
   std::vector<double> radii;   // [m] (S)
   double bounding_radius = 0;  // max |offset| + r: a sphere about the CoM holding the clump [m]
   double min_radius = 0;       // smallest sphere [m]
+  // The three principal moments equal to kSphericalTopSpread relative (a regular tetrahedron of
+  // equal spheres; one sphere): they are set to their mean, and the torque-free rotation is one
+  // turn about the body-fixed L (ClumpSet::BeginStep).
+  bool spherical_top = false;
   size_t size() const { return radii.size(); }
 };
 ClumpShape MakeClumpShape(const ClumpTemplate& t);
