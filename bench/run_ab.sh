@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# A/B of whole runs: `scoopsim run SCENE` with each binary in turn (A, B, A, B, ...), so that a
+# shared host's slow spells hit both alike. Records each run's CPU time (user + sys, pour and dig
+# and output), wall time and final state hash; prints the medians and the per-pair ratios of CPU
+# time (A / B), and appends one CSV row per run to bench/results/$MACHINE/run_ab.csv.
+#
+#   BINS="/tmp/base/scoopsim build/scoopsim" bench/run_ab.sh scenes/tiny_dig.yaml
+#   BINS="..." NRUNS=5 THREADS=2 LABEL=isa bench/run_ab.sh scenes/quick_dig.yaml
+#
+# Environment: BINS (required: two binaries, the baseline first), NRUNS (5), THREADS (1), LABEL
+# (a word for the CSV rows), MACHINE (hostname).
+set -euo pipefail
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+: "${BINS:?set BINS to two binaries, baseline first}"
+SCENE=${1:?usage: BINS=\"A B\" bench/run_ab.sh SCENE}
+NRUNS=${NRUNS:-5}
+THREADS=${THREADS:-1}
+LABEL=${LABEL:-$(basename "$SCENE" .yaml)}
+MACHINE=${MACHINE:-$(hostname -s 2>/dev/null || hostname)}
+RESDIR="$ROOT/bench/results/$MACHINE"
+CSV="$RESDIR/run_ab.csv"
+mkdir -p "$RESDIR"
+if [ ! -s "$CSV" ]; then
+  echo "# cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), $(nproc) cores" >"$CSV"
+  echo "date,label,scene,binary,run,threads,cpu_s,wall_s,state_hash" >>"$CSV"
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
+for r in $(seq "$NRUNS"); do
+  for b in $BINS; do
+    out="$work/run.h5"
+    /usr/bin/time -f "%U %S %e" -o "$work/time" "$b" run "$SCENE" -o "$out" --threads "$THREADS" \
+      --quiet >/dev/null 2>&1
+    read -r user sys wall <"$work/time"
+    hash=$(/usr/bin/python3 -c "import h5py,sys; print(h5py.File(sys.argv[1],'r').attrs['state_hash'])" "$out")
+    cpu=$(awk "BEGIN{print $user + $sys}")
+    echo "$b run $r: cpu $cpu s, wall $wall s, state hash $hash"
+    echo "$(date -u +%Y-%m-%dT%H:%M:%S),$LABEL,$SCENE,$b,$r,$THREADS,$cpu,$wall,$hash" >>"$CSV"
+    rm -f "$work"/run.*
+  done
+done
+/usr/bin/python3 - "$CSV" "$LABEL" $BINS <<'PY'
+import csv, statistics, sys
+path, label, a, b = sys.argv[1:5]
+rows = [r for r in csv.DictReader(l for l in open(path) if not l.startswith("#"))
+        if r["label"] == label]
+cpu = {k: [float(r["cpu_s"]) for r in rows if r["binary"] == k] for k in (a, b)}
+n = min(len(cpu[a]), len(cpu[b]))
+ratios = [x / y for x, y in zip(cpu[a][-n:], cpu[b][-n:])]
+print(f"{label}: CPU s median {statistics.median(cpu[a]):.3g} ({a}) / {statistics.median(cpu[b]):.3g} ({b});"
+      f" per pair {', '.join(f'{x:.3f}' for x in ratios)}: median {statistics.median(ratios):.3f}"
+      f" ({min(ratios):.3f}-{max(ratios):.3f})")
+PY
