@@ -101,7 +101,8 @@ struct ArmModel {
   bool FindLink(const std::string& link, int* body, Eigen::Isometry3d* in_body) const;
 };
 
-// Loads a URDF file; the chain ends at `tip_link`.
+// Loads a URDF file; the chain ends at `tip_link`. A URDF of more than 64 MiB is refused (a URDF
+// names its meshes, it does not hold them); the text is read in time linear in its size.
 ArmModel LoadArmModel(const std::string& path, const std::string& tip_link = "l_scoop");
 // Parses URDF text. `source` names it in messages; mesh file names are resolved against
 // `base_dir` (empty: left as written).
