@@ -268,6 +268,61 @@ std::string TooLarge(std::uintmax_t bytes) {
   return out.str();
 }
 
+// Checks that the joints make the links a tree: no link the child of two joints (urdfdom keeps
+// the last, by name, without a word) and no link its own ancestor (urdfdom accepts a loop cut off
+// from the root; walking up from a link in it never ends). Names the joint at fault: the second
+// parent in the file, or the loop's first joint in the file. In time linear in the joints.
+void CheckTree(const Reporter& report, const urdf::ModelInterface& urdf) {
+  using Placed = std::pair<int, const urdf::Joint*>;  // (line, joint)
+  const auto file_order = [](const Placed& a, const Placed& b) {
+    return a.first != b.first ? a.first < b.first : a.second->name < b.second->name;
+  };
+  std::vector<Placed> joints;
+  for (const auto& [name, joint] : urdf.joints_)
+    joints.emplace_back(report.Line("joint", name), joint.get());
+  std::sort(joints.begin(), joints.end(), file_order);
+  std::map<std::string, const urdf::Joint*> parent_joint;  // link -> the joint it is child of
+  for (const auto& [line, j] : joints) {
+    const auto [it, first] = parent_joint.emplace(j->child_link_name, j);
+    if (!first) {
+      report.Fail("joint", j->name, "joint '" + j->name + "' <child>",
+                  "expected a link with one parent joint (the links a tree), got link '" +
+                      j->child_link_name + "', already the child of joint '" + it->second->name +
+                      "'");
+    }
+  }
+  // Walk up from each link until a link already walked: one seen in this walk closes a loop.
+  std::map<std::string, int> walk_of;  // link -> the walk that reached it (1, 2, ...)
+  int walk = 0;
+  for (const auto& [line, j] : joints) {
+    ++walk;
+    std::string link = j->child_link_name;
+    while (!walk_of.count(link)) {
+      walk_of[link] = walk;
+      const auto up = parent_joint.find(link);
+      if (up == parent_joint.end()) break;
+      link = up->second->parent_link_name;
+    }
+    if (walk_of.at(link) != walk || !parent_joint.count(link)) continue;
+    // `link` is on a loop: its joints, the first in the file named.
+    std::vector<Placed> loop;
+    std::string at = link;
+    do {
+      const urdf::Joint* up = parent_joint.at(at);
+      loop.emplace_back(report.Line("joint", up->name), up);
+      at = up->parent_link_name;
+    } while (at != link);
+    std::sort(loop.begin(), loop.end(), file_order);
+    std::string names;
+    for (const auto& [l, up] : loop) names += (names.empty() ? "" : ", ") + up->name;
+    const urdf::Joint& first = *loop.front().second;
+    report.Fail("joint", first.name, "joint '" + first.name + "' <parent>",
+                "expected the links to form a tree (no link its own ancestor), got a loop through "
+                "joints " +
+                    names);
+  }
+}
+
 }  // namespace
 
 ArmModel LoadArmModel(const std::string& path, const std::string& tip_link) {
@@ -329,6 +384,7 @@ ArmModel ParseArmModel(const std::string& urdf_text, const std::string& source,
   model.robot_name = urdf->getName();
   model.tip_link = tip_link;
 
+  CheckTree(report, *urdf);
   const urdf::LinkConstSharedPtr root = urdf->getRoot();
   const urdf::LinkConstSharedPtr tip = urdf->getLink(tip_link);
   if (!tip) {

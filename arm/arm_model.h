@@ -12,6 +12,9 @@
 // the root to the tip is held at zero and its child merged like a fixed one (it is listed in
 // ArmModel::held_joints). On the chain only `revolute` and `continuous` are supported.
 //
+// The joints must make the links a tree: a link that is the child of two joints, or a loop of
+// joints, is refused naming the joint (the second parent, the loop's first joint in the file).
+//
 // Bad input throws ArmModelError, one line: "FILE:LINE: ELEMENT: expected ..., got ..." (LINE is
 // left out where the element has none, e.g. a missing file).
 #pragma once

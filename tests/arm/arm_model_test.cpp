@@ -245,6 +245,27 @@ TEST(ArmModelTest, NegativeDamping) {
                   "damping -1 friction 2.6");
 }
 
+// Defect: a joint's parent set to a link below it (j_dist_pitch hung from l_grinder) made a loop
+// cut off from the root, which urdfdom accepts; walking up from the scoop never ended and grew
+// memory until std::bad_alloc. The loop is refused, its first joint in the file named.
+TEST(ArmModelTest, JointLoopNamesTheJoint) {
+  ExpectLoadError("loop.urdf", Edited("<parent link=\"l_dist\"/>", "<parent link=\"l_grinder\"/>"),
+                  "<joint name=\"j_dist_pitch\"",
+                  "joint 'j_dist_pitch' <parent>: expected the links to form a tree (no link its "
+                  "own ancestor), got a loop through joints j_dist_pitch, j_hand_yaw, j_grinder");
+}
+
+// Defect: a link that is the child of two joints was taken silently (urdfdom keeps one of them,
+// by name). The second joint in the file is named.
+TEST(ArmModelTest, LinkWithTwoParentsNamesTheSecondJoint) {
+  const std::string extra =
+      "  <joint name=\"j_extra\" type=\"fixed\">\n    <parent link=\"l_shou\"/>\n"
+      "    <child link=\"l_grinder\"/>\n  </joint>\n</robot>";
+  ExpectLoadError("two_parents.urdf", Edited("</robot>", extra), "<joint name=\"j_extra\"",
+                  "joint 'j_extra' <child>: expected a link with one parent joint (the links a "
+                  "tree), got link 'l_grinder', already the child of joint 'j_grinder'");
+}
+
 // The lander's URDF with ~8 MB of comment before its first link; the comment opens a tag it never
 // closes ("<link xxx...", as a commented-out element would).
 std::string HugeUrdf(const std::string& text) {
