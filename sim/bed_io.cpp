@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "sim/h5_output.h"
 #include "sim/internal_h5.h"
 #include "sim/scene.h"
 
@@ -371,20 +372,16 @@ void SaveBed(const std::string& path, const dem::System& system, const std::stri
   h5::SnapshotEntry entry;
   try {
     entry = WriteBedFile(temporary, system, scene_yaml, pour);
-    fs::rename(temporary, path);
   } catch (const InputError& e) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
     throw InputError(path + ": cannot save the bed: " + e.what());
-  } catch (const fs::filesystem_error& e) {
-    std::error_code ignored;
-    fs::remove(temporary, ignored);
-    throw InputError(path + ": cannot save the bed: " + e.code().message());
   } catch (...) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
     throw;
   }
+  PlaceOutput(temporary, path);  // under the output lock (sim/h5_output.h)
   h5::WriteXdmf(path, {entry});
 }
 

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <hdf5.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -702,6 +703,33 @@ bool LockFile(int fd) {
   return ::fcntl(fd, F_OFD_SETLK, &lock) == 0 || (errno != EAGAIN && errno != EACCES);
 }
 
+std::string AnotherWriter(const std::string& path) {
+  return path +
+         ": another process (a scoopsim run?) is writing this file; give this run another -o";
+}
+
+// Opens the file at `path` for the lock (-1 with errno when it cannot be opened: ENOENT when it
+// is not there); throws sim::InputError when it is not a regular file (a device, a FIFO, a
+// folder), which an output would replace. Opened without blocking and without becoming the
+// controlling terminal, then checked again (the name may have changed in between).
+int OpenOldOutput(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return -1;
+  if (S_ISREG(st.st_mode)) {
+    const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+    if (fd < 0 || (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode))) return fd;
+    ::close(fd);  // something else took the name meanwhile
+  }
+  const char* kind = S_ISDIR(st.st_mode)    ? "a folder"
+                     : S_ISCHR(st.st_mode)  ? "a character device"
+                     : S_ISBLK(st.st_mode)  ? "a block device"
+                     : S_ISFIFO(st.st_mode) ? "a FIFO (named pipe)"
+                     : S_ISSOCK(st.st_mode) ? "a socket"
+                                            : "not a regular file";
+  throw InputError(path + ": expected a regular file or a new path to write the output, got " +
+                   kind);
+}
+
 // Puts the new file `temporary` (written, flushed and locked by this process) in place at
 // `path`, refusing when another process writes `path`: a new name is taken with link() (fails if
 // the name exists), an existing file is locked first, then replaced with rename(); either step
@@ -715,14 +743,12 @@ int PutInPlace(const std::string& temporary, const std::string& path) {
       return -1;
     }
     if (errno != EEXIST && errno != EPERM && errno != ENOTSUP) break;
-    const int old = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+    const int old = OpenOldOutput(path);
     if (old < 0 && errno == ENOENT) continue;  // gone meanwhile: take the name again
     if (old < 0) break;
     if (!LockFile(old)) {
       ::close(old);
-      throw InputError(path +
-                       ": another process (a scoopsim run?) is writing this file; give "
-                       "this run another -o");
+      throw InputError(AnotherWriter(path));
     }
     if (::rename(temporary.c_str(), path.c_str()) == 0) return old;
     ::close(old);
@@ -732,6 +758,25 @@ int PutInPlace(const std::string& temporary, const std::string& path) {
 }
 
 }  // namespace
+
+void CheckOutputPath(const std::string& path) {
+  const int fd = OpenOldOutput(path);
+  if (fd < 0) return;  // a new path (or one the write will say why it cannot take)
+  const bool free = LockFile(fd);
+  ::close(fd);  // (releases the lock: the only descriptor of its open file description)
+  if (!free) throw InputError(AnotherWriter(path));
+}
+
+void PlaceOutput(const std::string& temporary, const std::string& path) {
+  try {
+    const int old = PutInPlace(temporary, path);
+    if (old >= 0) ::close(old);
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw;
+  }
+}
 
 H5Output::H5Output(const std::string& path, const std::string& scene_yaml,
                    const std::string& version, double flush_seconds, const OutputCursor* resume)

@@ -14,6 +14,7 @@
 #include <map>
 #include <set>
 
+#include "sim/h5_output.h"
 #include "sim/internal_h5.h"
 
 namespace sim {
@@ -227,6 +228,7 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
     throw InputError("-o " + table_path + ": names a file in " + dir +
                      "/cases/, where the case files are; give another table file");
   }
+  CheckOutputPath(table_path);
   // The cases, by file name.
   const fs::path cases_dir = fs::path(dir) / "cases";
   std::vector<fs::path> files;
@@ -350,7 +352,7 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
     WriteStrings(f, "/cases/scene_yaml", texts);
     if (file.reset() < 0) throw std::runtime_error("HDF5: closing " + tmp + " failed");
   }
-  fs::rename(tmp, table_path);
+  PlaceOutput(tmp, table_path);  // under the output lock (sim/h5_output.h)
   char summary[256];
   std::snprintf(summary, sizeof summary,
                 "%zu cases: %zu material(s), %zu bite depth(s), %zu pass(es), %zu rho nodes "
@@ -504,6 +506,7 @@ void WrenchTable::ExportCsv(const std::string& csv_path, int digits) const {
   };
   if (fs::path(csv_path).has_parent_path())
     fs::create_directories(fs::path(csv_path).parent_path());
+  CheckOutputPath(csv_path);
   const std::string tmp = csv_path + ".tmp";
   {
     std::ofstream out(tmp, std::ios::trunc);
@@ -526,7 +529,7 @@ void WrenchTable::ExportCsv(const std::string& csv_path, int digits) const {
     out.flush();
     if (!out) throw std::runtime_error("cannot write " + tmp);
   }
-  fs::rename(tmp, csv_path);
+  PlaceOutput(tmp, csv_path);  // under the output lock (sim/h5_output.h)
 }
 
 }  // namespace sim

@@ -2,7 +2,10 @@
 // the tests' temporary folders (ProcessTempDir).
 #pragma once
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -14,6 +17,7 @@
 #include <mutex>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace scoopsim_test {
@@ -96,6 +100,35 @@ inline int Wait(pid_t pid) {
   int status = 0;
   ::waitpid(pid, &status, 0);
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// Takes the write lock that scoopsim's writers take on an output file (an open-file-description
+// lock, fcntl F_OFD_SETLK: sim/h5_output.h), as a process writing `path` holds it: the
+// descriptor (closing it releases the lock), or -1 when the lock cannot be had.
+inline int HoldOutputLock(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  struct flock lock {};
+  lock.l_type = F_WRLCK;
+  lock.l_whence = SEEK_SET;
+  if (fd >= 0 && ::fcntl(fd, F_OFD_SETLK, &lock) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+// Paths made in `dir` that no output may replace, each with the word scoopsim's refusal uses:
+// a FIFO (mkfifo works unprivileged) and, where mknod is allowed (root), a character device
+// with /dev/null's numbers.
+inline std::vector<std::pair<std::string, std::string>> SpecialFiles(
+    const std::filesystem::path& dir) {
+  std::vector<std::pair<std::string, std::string>> made;
+  const std::string fifo = (dir / "fifo").string();
+  if (::mkfifo(fifo.c_str(), 0644) == 0) made.emplace_back(fifo, "a FIFO (named pipe)");
+  const std::string device = (dir / "device").string();
+  if (::mknod(device.c_str(), S_IFCHR | 0644, makedev(1, 3)) == 0)
+    made.emplace_back(device, "a character device");
+  return made;
 }
 
 }  // namespace scoopsim_test

@@ -233,6 +233,49 @@ TEST_F(RunOutputTest, SecondWriterIsRefused) {
   EXPECT_EQ(ReadRows(out, "/scoop/collected_mass").rows, 1) << "the pass did not end";
 }
 
+// Defect: `-o` naming a FIFO or a device (run, bed) replaced it with a regular file and exited 0
+// (as root, writing over /dev/full did that). Refused before any work, exit 2, one line; the node
+// is left as it was.
+TEST_F(RunOutputTest, OutputThatIsNotARegularFileIsRefused) {
+  const fs::path dir = TempDir() / "special";
+  fs::create_directories(dir);
+  const auto nodes = scoopsim_test::SpecialFiles(dir);
+  ASSERT_FALSE(nodes.empty()) << "mkfifo failed";
+  if (nodes.size() < 2) std::fprintf(stderr, "no character device made (not root): FIFO only\n");
+  for (const auto& [path, kind] : nodes) {
+    for (const char* command : {"run", "bed"}) {
+      SCOPED_TRACE(std::string(command) + " -o " + path);
+      const std::string log = (TempDir() / "special.log").string();
+      EXPECT_EQ(Wait(Spawn({command, Scene(), "-o", path}, log)), 2);
+      const std::vector<std::string> lines = Lines(ReadText(log));
+      ASSERT_EQ(lines.size(), 1u) << ReadText(log);
+      EXPECT_EQ(lines[0], "scoopsim: " + path +
+                              ": expected a regular file or a new path to write the output, got " +
+                              kind);
+      EXPECT_FALSE(fs::is_regular_file(path)) << "replaced";
+    }
+  }
+}
+
+// Defect: `scoopsim bed -o X` while a run wrote X exited 0 and X held the bed; the run's rows
+// were lost. Every writer takes the run's lock: with the lock held (as a run writing X holds it),
+// bed is refused before any work, exit 2, one line, X untouched.
+TEST_F(RunOutputTest, BedOverAnOutputBeingWrittenIsRefused) {
+  const std::string out = (TempDir() / "being_written.h5").string();
+  std::ofstream(out) << "a run's rows";
+  const int lock = scoopsim_test::HoldOutputLock(out);
+  ASSERT_GE(lock, 0);
+  const std::string log = (TempDir() / "locked.log").string();
+  EXPECT_EQ(Wait(Spawn({"bed", Scene(), "-o", out}, log)), 2);
+  ::close(lock);
+  const std::vector<std::string> lines = Lines(ReadText(log));
+  ASSERT_EQ(lines.size(), 1u) << ReadText(log);
+  EXPECT_EQ(lines[0], "scoopsim: " + out +
+                          ": another process (a scoopsim run?) is writing this file; give this "
+                          "run another -o");
+  EXPECT_EQ(ReadText(out), "a run's rows");
+}
+
 // `-o` naming the scene's own bed.file (by another spelling too) is refused, exit 2, one line,
 // the bed untouched.
 TEST_F(RunOutputTest, OutputOverTheRunsOwnBedIsRefused) {
