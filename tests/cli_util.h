@@ -4,14 +4,17 @@
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/mount.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -129,6 +132,42 @@ inline std::vector<std::pair<std::string, std::string>> SpecialFiles(
   if (::mknod(device.c_str(), S_IFCHR | 0644, makedev(1, 3)) == 0)
     made.emplace_back(device, "a character device");
   return made;
+}
+
+// A tmpfs of `size` bytes ("64k") mounted on the folder `dir` (made) while this lives: a full
+// disk in miniature. Where mounting is not allowed (not root, a container without
+// CAP_SYS_ADMIN) mounted() is false and error() says why: the test skips with a message.
+class ScopedTmpfs {
+ public:
+  ScopedTmpfs(const std::filesystem::path& dir, const std::string& size) : dir_(dir) {
+    std::filesystem::create_directories(dir);
+    mounted_ = ::mount("tmpfs", dir.c_str(), "tmpfs", 0, ("size=" + size).c_str()) == 0;
+    if (!mounted_) error_ = std::strerror(errno);
+  }
+  ~ScopedTmpfs() {
+    if (mounted_) ::umount2(dir_.c_str(), MNT_DETACH);
+  }
+  ScopedTmpfs(const ScopedTmpfs&) = delete;
+  ScopedTmpfs& operator=(const ScopedTmpfs&) = delete;
+  bool mounted() const { return mounted_; }
+  const std::string& error() const { return error_; }
+
+ private:
+  std::filesystem::path dir_;
+  bool mounted_ = false;
+  std::string error_;
+};
+
+// The files in `dir` whose names end in one of the temporary suffixes scoopsim's writers use
+// (.tmp, .partial, .new, .probe): none may be left after a failed write.
+inline std::vector<std::string> TemporaryFiles(const std::filesystem::path& dir) {
+  std::vector<std::string> left;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string ext = entry.path().extension().string();
+    if (ext == ".tmp" || ext == ".partial" || ext == ".new" || ext == ".probe")
+      left.push_back(entry.path().filename().string());
+  }
+  return left;
 }
 
 }  // namespace scoopsim_test

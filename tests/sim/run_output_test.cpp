@@ -2,9 +2,10 @@
 // sim/h5_output.cpp), end to end through the binary on tiny_dig (1450 spheres): a run SIGKILLed
 // at random moments leaves a file that plain HDF5 readers open (C API, h5py, h5dump) holding a
 // prefix of the uninterrupted run's rows, at least those a reader saw before the kill; a second
-// run given the same output and `-o` naming the scene's own bed are refused before any work; a
-// full disk (the file size limit, RLIMIT_FSIZE) gives one line and a file whose row counts are
-// true; a pour stopped by SIGINT or SIGKILL is kept and the same command goes on from it.
+// run given the same output, a bed over an output being written, `-o` naming a FIFO or a device
+// and `-o` naming the scene's own bed are refused before any work; a full disk (the file size
+// limit, RLIMIT_FSIZE, or a 64 KiB tmpfs) gives one line and a file whose row counts are true; a
+// pour stopped by SIGINT or SIGKILL is kept and the same command goes on from it.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <signal.h>
@@ -334,6 +335,23 @@ TEST_F(RunOutputTest, FullDiskGivesOneLineAndTrueRowCounts) {
               std::string::npos)
         << line;
   }
+}
+
+// Defect: a full disk (a 64 KiB tmpfs) while the pour's keep file was saved ended in SIGSEGV
+// (exit 139) inside HDF5's shutdown, after a line blaming H5Fclose. Now: exit 1, one line naming
+// the file and "No space left on device", no temporary file left.
+TEST_F(RunOutputTest, FullDiskWhileThePourIsKeptGivesOneLine) {
+  const fs::path small = TempDir() / "small_disk";
+  const scoopsim_test::ScopedTmpfs tmpfs(small, "64k");
+  if (!tmpfs.mounted()) GTEST_SKIP() << "cannot mount a 64 KiB tmpfs here: " << tmpfs.error();
+  const std::string scene = WriteScene("tiny_dig_full_disk.yaml", "", 0.02);
+  const std::string log = (TempDir() / "full_disk.log").string();
+  EXPECT_EQ(Wait(Spawn({"run", scene, "-o", (small / "out.h5").string()}, log)), 1);
+  const std::vector<std::string> lines = Lines(ReadText(log));
+  ASSERT_EQ(lines.size(), 1u) << ReadText(log);
+  EXPECT_EQ(lines[0], "scoopsim: error: " + (small / "out.pour.h5").string() +
+                          ": write failed (No space left on device)");
+  EXPECT_EQ(scoopsim_test::TemporaryFiles(small), std::vector<std::string>{});
 }
 
 // A pour SIGKILLed and then SIGINTed keeps the bed poured so far beside the output (a loadable
