@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -18,6 +19,8 @@
 #include <mutex>
 #include <regex>
 #include <sstream>
+
+#include "arm/internal_urdf_text.h"
 
 namespace arm {
 
@@ -62,61 +65,36 @@ class CaptureHandler : public console_bridge::OutputHandler {
   std::vector<std::string> errors;  // in the order urdfdom logged them
 };
 
-// Offset of the first `<tag ... name="name"` in the text, or std::string::npos.
-size_t ElementAt(const std::string& text, const std::string& tag, const std::string& name) {
-  std::string escaped;  // the name with the regex metacharacters escaped
-  for (char c : name) {
-    if (std::strchr(".^$|()[]{}*+?\\", c)) escaped += '\\';
-    escaped += c;
-  }
-  const std::regex pattern("<\\s*" + tag + "\\b[^>]*\\bname\\s*=\\s*[\"']" + escaped + "[\"']");
-  std::smatch match;
-  if (!std::regex_search(text, match, pattern)) return std::string::npos;
-  return static_cast<size_t>(match.position(0));
-}
-
-// 1-based line of the first `<tag ... name="name"` in the text, or 0.
-int LineOf(const std::string& text, const std::string& tag, const std::string& name) {
-  const size_t at = ElementAt(text, tag, name);
-  if (at == std::string::npos) return 0;
-  const auto begin = text.begin();
-  return 1 + static_cast<int>(std::count(begin, begin + static_cast<std::ptrdiff_t>(at), '\n'));
-}
-
 // Builds the one-line messages: "SOURCE:LINE: ELEMENT: expected ..., got ...".
 class Reporter {
  public:
-  Reporter(const std::string& source, const std::string& text) : source_(source), text_(text) {}
+  // The text is read once, here (UrdfIndex): a message's line is looked up, not searched for.
+  Reporter(const std::string& source, const std::string& text)
+      : source_(source), text_(text), index_(text) {}
   [[noreturn]] void Fail(const std::string& tag, const std::string& name,
                          const std::string& element, const std::string& what) const {
-    const int line = tag.empty() ? 0 : LineOf(text_, tag, name);
+    const int line = tag.empty() ? 0 : Line(tag, name);
     std::ostringstream out;
     out << source_;
     if (line > 0) out << ':' << line;
     out << ": " << element << ": " << what;
     throw ArmModelError(out.str());
   }
-  int Line(const std::string& tag, const std::string& name) const {
-    return LineOf(text_, tag, name);
-  }
+  // 1-based line of the first `<tag ... name="name"` in the text, or 0.
+  int Line(const std::string& tag, const std::string& name) const { return index_.Line(tag, name); }
   // The text of attribute `attr` of the first <child> inside <link name="link">, as written
   // ("" when there is none): urdfdom reads a value it cannot parse as 0.
   std::string Raw(const std::string& link, const std::string& child,
                   const std::string& attr) const {
-    const size_t from = ElementAt(text_, "link", link);
-    if (from == std::string::npos) return "";
-    const size_t to = text_.find("</link>", from);
-    const std::string body =
-        text_.substr(from, to == std::string::npos ? std::string::npos : to - from);
-    std::smatch value;
-    const std::regex pattern("<\\s*" + child + "\\b[^>]*\\b" + attr +
-                             "\\s*=\\s*[\"']([^\"']*)[\"']");
-    return std::regex_search(body, value, pattern) ? value[1].str() : "";
+    const auto [begin, end] = index_.Span("link", link);
+    if (begin == std::string::npos) return "";
+    return AttributeIn(text_, begin, end, child, attr);
   }
 
  private:
   const std::string& source_;
   const std::string& text_;
+  const UrdfIndex index_;
 };
 
 std::string Num(double v) {
@@ -279,6 +257,72 @@ std::string TypeName(int type) {
   }
 }
 
+// The most URDF text read: a URDF names its meshes, it does not hold them (the lander's is 7 kB).
+constexpr std::uintmax_t kMaxUrdfBytes = std::uintmax_t{64} << 20;
+
+std::string TooLarge(std::uintmax_t bytes) {
+  std::ostringstream out;
+  out.precision(3);
+  out << "expected at most " << (kMaxUrdfBytes >> 20) << " MiB of URDF, got "
+      << static_cast<double>(bytes) / (1 << 20) << " MiB";
+  return out.str();
+}
+
+// Checks that the joints make the links a tree: no link the child of two joints (urdfdom keeps
+// the last, by name, without a word) and no link its own ancestor (urdfdom accepts a loop cut off
+// from the root; walking up from a link in it never ends). Names the joint at fault: the second
+// parent in the file, or the loop's first joint in the file. In time linear in the joints.
+void CheckTree(const Reporter& report, const urdf::ModelInterface& urdf) {
+  using Placed = std::pair<int, const urdf::Joint*>;  // (line, joint)
+  const auto file_order = [](const Placed& a, const Placed& b) {
+    return a.first != b.first ? a.first < b.first : a.second->name < b.second->name;
+  };
+  std::vector<Placed> joints;
+  for (const auto& [name, joint] : urdf.joints_)
+    joints.emplace_back(report.Line("joint", name), joint.get());
+  std::sort(joints.begin(), joints.end(), file_order);
+  std::map<std::string, const urdf::Joint*> parent_joint;  // link -> the joint it is child of
+  for (const auto& [line, j] : joints) {
+    const auto [it, first] = parent_joint.emplace(j->child_link_name, j);
+    if (!first) {
+      report.Fail("joint", j->name, "joint '" + j->name + "' <child>",
+                  "expected a link with one parent joint (the links a tree), got link '" +
+                      j->child_link_name + "', already the child of joint '" + it->second->name +
+                      "'");
+    }
+  }
+  // Walk up from each link until a link already walked: one seen in this walk closes a loop.
+  std::map<std::string, int> walk_of;  // link -> the walk that reached it (1, 2, ...)
+  int walk = 0;
+  for (const auto& [line, j] : joints) {
+    ++walk;
+    std::string link = j->child_link_name;
+    while (!walk_of.count(link)) {
+      walk_of[link] = walk;
+      const auto up = parent_joint.find(link);
+      if (up == parent_joint.end()) break;
+      link = up->second->parent_link_name;
+    }
+    if (walk_of.at(link) != walk || !parent_joint.count(link)) continue;
+    // `link` is on a loop: its joints, the first in the file named.
+    std::vector<Placed> loop;
+    std::string at = link;
+    do {
+      const urdf::Joint* up = parent_joint.at(at);
+      loop.emplace_back(report.Line("joint", up->name), up);
+      at = up->parent_link_name;
+    } while (at != link);
+    std::sort(loop.begin(), loop.end(), file_order);
+    std::string names;
+    for (const auto& [l, up] : loop) names += (names.empty() ? "" : ", ") + up->name;
+    const urdf::Joint& first = *loop.front().second;
+    report.Fail("joint", first.name, "joint '" + first.name + "' <parent>",
+                "expected the links to form a tree (no link its own ancestor), got a loop through "
+                "joints " +
+                    names);
+  }
+}
+
 }  // namespace
 
 ArmModel LoadArmModel(const std::string& path, const std::string& tip_link) {
@@ -287,6 +331,9 @@ ArmModel LoadArmModel(const std::string& path, const std::string& tip_link) {
     throw ArmModelError(path + ": URDF file: expected a readable file, got " +
                         std::strerror(errno));
   }
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (!ec && size > kMaxUrdfBytes) throw ArmModelError(path + ": URDF file: " + TooLarge(size));
   std::ostringstream text;
   text << in.rdbuf();
   const std::string dir = std::filesystem::path(path).parent_path().string();
@@ -295,6 +342,8 @@ ArmModel LoadArmModel(const std::string& path, const std::string& tip_link) {
 
 ArmModel ParseArmModel(const std::string& urdf_text, const std::string& source,
                        const std::string& tip_link, const std::string& base_dir) {
+  if (urdf_text.size() > kMaxUrdfBytes)
+    throw ArmModelError(source + ": URDF text: " + TooLarge(urdf_text.size()));
   const Reporter report(source, urdf_text);
 
   // urdfdom: its error text goes into our message instead of onto stderr. console_bridge's
@@ -335,6 +384,7 @@ ArmModel ParseArmModel(const std::string& urdf_text, const std::string& source,
   model.robot_name = urdf->getName();
   model.tip_link = tip_link;
 
+  CheckTree(report, *urdf);
   const urdf::LinkConstSharedPtr root = urdf->getRoot();
   const urdf::LinkConstSharedPtr tip = urdf->getLink(tip_link);
   if (!tip) {

@@ -12,6 +12,9 @@
 // the root to the tip is held at zero and its child merged like a fixed one (it is listed in
 // ArmModel::held_joints). On the chain only `revolute` and `continuous` are supported.
 //
+// The joints must make the links a tree: a link that is the child of two joints, or a loop of
+// joints, is refused naming the joint (the second parent, the loop's first joint in the file).
+//
 // Bad input throws ArmModelError, one line: "FILE:LINE: ELEMENT: expected ..., got ..." (LINE is
 // left out where the element has none, e.g. a missing file).
 #pragma once
@@ -101,7 +104,8 @@ struct ArmModel {
   bool FindLink(const std::string& link, int* body, Eigen::Isometry3d* in_body) const;
 };
 
-// Loads a URDF file; the chain ends at `tip_link`.
+// Loads a URDF file; the chain ends at `tip_link`. A URDF of more than 64 MiB is refused (a URDF
+// names its meshes, it does not hold them); the text is read in time linear in its size.
 ArmModel LoadArmModel(const std::string& path, const std::string& tip_link = "l_scoop");
 // Parses URDF text. `source` names it in messages; mesh file names are resolved against
 // `base_dir` (empty: left as written).

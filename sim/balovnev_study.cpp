@@ -91,6 +91,7 @@ int RunBalovnevStudy(const Scene& scene_in, const BalovnevStudyOptions& options)
     scene.dig.passes = 1;
   }
   RefuseOutputOverScene(options.output, scene);
+  CheckOutputPath(options.output);
   const std::string csv_path = BalovnevCsvPath(options.output);
   CheckWritable(csv_path);
 

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "sim/h5_output.h"
 #include "sim/internal_h5.h"
 #include "sim/scene.h"
 
@@ -120,12 +121,11 @@ void WriteClumps(hid_t file, const dem::System& system) {
                  c.member.size(), 1);
 }
 
-// Writes everything but the sidecar into a new file at `path`.
-h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& system,
-                               const std::string& scene_yaml, const PourPoint* pour) {
+// Writes everything but the sidecar into the new file `file`.
+h5::SnapshotEntry WriteBed(hid_t file, const dem::System& system, const std::string& scene_yaml,
+                           const PourPoint* pour) {
   const dem::Particles& p = system.particles();
-  Handle file = h5::CreateFile(path, /*swmr=*/false, nullptr);
-  Handle root(CheckId(H5Gopen2(file.get(), "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);
+  Handle root(CheckId(H5Gopen2(file, "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);
   h5::WriteStringAttribute(root.get(), "version", SCOOPSIM_VERSION);
   h5::WriteStringAttribute(root.get(), "scene_yaml", scene_yaml);
   h5::WriteDoubleAttribute(root.get(), "time", system.time());
@@ -137,19 +137,17 @@ h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& syste
     h5::WriteDoubleAttribute(root.get(), "pour_layer_t0", pour->layer_t0);
     h5::WriteDoubleAttribute(root.get(), "pour_layer_fall", pour->layer_fall);
     h5::WriteDoubleAttribute(root.get(), "pour_layer_settled", pour->settled ? 1.0 : 0.0);
-    h5::WriteBytes(file.get(), "/pour_state", system.SaveState());
+    h5::WriteBytes(file, "/pour_state", system.SaveState());
   }
 
   // Particles: the snapshot holds the arrays; /particles links to them and adds force, torque.
-  const h5::SnapshotEntry entry = h5::WriteParticleSnapshot(file.get(), 0, system.time(), p);
-  Handle particles(
-      CheckId(H5Gcreate2(file.get(), "/particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-              "H5Gcreate2 /particles"),
-      H5Gclose);
+  const h5::SnapshotEntry entry = h5::WriteParticleSnapshot(file, 0, system.time(), p);
+  Handle particles(CheckId(H5Gcreate2(file, "/particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                           "H5Gcreate2 /particles"),
+                   H5Gclose);
   for (const char* field : kLinkedFields) {
     const std::string target = entry.group + "/" + field;
-    CheckOk(H5Lcreate_hard(file.get(), target.c_str(), particles.get(), field, H5P_DEFAULT,
-                           H5P_DEFAULT),
+    CheckOk(H5Lcreate_hard(file, target.c_str(), particles.get(), field, H5P_DEFAULT, H5P_DEFAULT),
             "H5Lcreate_hard " + target);
   }
   const std::vector<size_t> order = h5::IdOrder(p);
@@ -158,7 +156,7 @@ h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& syste
 
   std::vector<std::string> names;
   for (int i = 0; i < system.materials().size(); ++i) names.push_back(system.materials()[i].name);
-  WriteStringList(file.get(), "/materials/names", names);
+  WriteStringList(file, "/materials/names", names);
 
   // Contact history, already sorted by (a, b).
   const std::vector<dem::ContactRecord> contacts = system.Contacts();
@@ -172,18 +170,15 @@ h5::SnapshotEntry WriteBedFile(const std::string& path, const dem::System& syste
     shear[3 * k + 1] = contacts[k].shear.y;
     shear[3 * k + 2] = contacts[k].shear.z;
   }
-  Handle group(CheckId(H5Gcreate2(file.get(), "/contacts", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+  Handle group(CheckId(H5Gcreate2(file, "/contacts", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
                        "H5Gcreate2 /contacts"),
                H5Gclose);
   h5::WriteArray(group.get(), "a", H5T_STD_I64LE, H5T_NATIVE_INT64, a.data(), m, 1);
   h5::WriteArray(group.get(), "b", H5T_STD_I64LE, H5T_NATIVE_INT64, b.data(), m, 1);
   h5::WriteArray(group.get(), "shear", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, shear.data(), m, 3);
   group.reset();
-  if (system.clumps().size() > 0) WriteClumps(file.get(), system);
+  if (system.clumps().size() > 0) WriteClumps(file, system);
 
-  particles.reset();
-  root.reset();
-  CheckOk(file.reset(), "H5Fclose " + path);
   return entry;
 }
 
@@ -370,21 +365,20 @@ void SaveBed(const std::string& path, const dem::System& system, const std::stri
   const std::string temporary = path + "." + std::to_string(::getpid()) + ".partial";
   h5::SnapshotEntry entry;
   try {
-    entry = WriteBedFile(temporary, system, scene_yaml, pour);
-    fs::rename(temporary, path);
+    Handle file = h5::CreateFile(temporary, /*swmr=*/false, nullptr, path);
+    h5::WriteNewFile(file.get(), path,
+                     [&] { entry = WriteBed(file.get(), system, scene_yaml, pour); });
+    CheckOk(file.reset(), "H5Fclose " + temporary);
   } catch (const InputError& e) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
     throw InputError(path + ": cannot save the bed: " + e.what());
-  } catch (const fs::filesystem_error& e) {
-    std::error_code ignored;
-    fs::remove(temporary, ignored);
-    throw InputError(path + ": cannot save the bed: " + e.code().message());
   } catch (...) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
     throw;
   }
+  PlaceOutput(temporary, path);  // under the output lock (sim/h5_output.h)
   h5::WriteXdmf(path, {entry});
 }
 

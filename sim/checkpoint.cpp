@@ -28,20 +28,25 @@ void WriteCheckpoint(const std::string& path, const Checkpoint& c) {
   namespace fs = std::filesystem;
   const std::string temporary = path + "." + std::to_string(::getpid()) + ".partial";
   try {
-    Handle file = h5::CreateFile(temporary, /*swmr=*/false, nullptr);
-    Handle root(CheckId(H5Gopen2(file.get(), "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);
-    h5::WriteStringAttribute(root.get(), "format", "scoopsim restart");
-    h5::WriteDoubleAttribute(root.get(), "format_version", kCheckpointFormat);
-    h5::WriteStringAttribute(root.get(), "version", SCOOPSIM_VERSION);
-    h5::WriteStringAttribute(root.get(), "scene_path", c.scene_path);
-    h5::WriteStringAttribute(root.get(), "scene_yaml", c.scene_yaml);
-    h5::WriteDoubleAttribute(root.get(), "time", c.time);
-    h5::WriteBytes(file.get(), "dem_state", c.dem_state);
-    h5::WriteBytes(file.get(), "world_state", c.world_state);
-    h5::WriteBytes(file.get(), "output_state", c.output_state);
-    root.reset();
+    Handle file = h5::CreateFile(temporary, /*swmr=*/false, nullptr, path);
+    h5::WriteNewFile(file.get(), path, [&] {
+      Handle root(CheckId(H5Gopen2(file.get(), "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);
+      h5::WriteStringAttribute(root.get(), "format", "scoopsim restart");
+      h5::WriteDoubleAttribute(root.get(), "format_version", kCheckpointFormat);
+      h5::WriteStringAttribute(root.get(), "version", SCOOPSIM_VERSION);
+      h5::WriteStringAttribute(root.get(), "scene_path", c.scene_path);
+      h5::WriteStringAttribute(root.get(), "scene_yaml", c.scene_yaml);
+      h5::WriteDoubleAttribute(root.get(), "time", c.time);
+      h5::WriteBytes(file.get(), "dem_state", c.dem_state);
+      h5::WriteBytes(file.get(), "world_state", c.world_state);
+      h5::WriteBytes(file.get(), "output_state", c.output_state);
+    });
     CheckOk(file.reset(), "H5Fclose " + temporary);
     fs::rename(temporary, path);
+  } catch (const OutputError&) {  // a full disk: "PATH: write failed (REASON)"
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    throw;
   } catch (const std::exception& e) {
     std::error_code ignored;
     fs::remove(temporary, ignored);

@@ -61,6 +61,7 @@ std::string PourPath(const std::string& output) {
 
 void CheckWritable(const std::string& path) {
   h5::MakeParentFolders(path);
+  CheckOutputPath(path);
   // A file of our own beside it, created and removed: the folder takes new files.
   const std::string probe = path + "." + std::to_string(::getpid()) + ".probe";
   std::FILE* f = std::fopen(probe.c_str(), "wb");
@@ -136,6 +137,7 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
 int RunScene(const Scene& scene, const RunOptions& options) {
   // The arm on a wrench table: no bed, no DEM (sim/table_arm.h).
   RefuseOutputOverScene(options.output, scene);
+  CheckOutputPath(options.output);
   if (scene.arm.table_driven) return RunTableArm(scene, options).exit_status;
   InstallStopHandlers();
   // The output first, before any work: refused when it is one of the run's inputs (above) or

@@ -33,8 +33,8 @@ struct RunOptions {
 
 // Where a command that pours keeps the bed poured so far (World::KeepPour): OUT.h5 -> OUT.pour.h5.
 std::string PourPath(const std::string& output);
-// Creates the parent folders of `path` and checks a file can be created there; throws
-// sim::InputError naming the path and the reason.
+// Creates the parent folders of `path` and checks a file can be created there and an output can
+// go there (sim::CheckOutputPath); throws sim::InputError naming the path and the reason.
 void CheckWritable(const std::string& path);
 
 // Throws sim::InputError when `output` is the file `input` (the same file by any path; "" never

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <hdf5.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -13,7 +14,6 @@
 #include <cstring>
 #include <exception>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -61,7 +61,7 @@ void SetCompactLinks(hid_t plist, unsigned links) {
 
 }  // namespace
 
-Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
+Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr, const std::string& name) {
   if (got_swmr != nullptr) *got_swmr = false;
   MakeParentFolders(path);
   // Every call is checked and reported on one line: HDF5's own stack print would bury it (a full
@@ -74,13 +74,16 @@ Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
   // as intermediate groups.
   Handle fcpl(CheckId(H5Pcreate(H5P_FILE_CREATE), "H5Pcreate"), H5Pclose);
   SetCompactLinks(fcpl.get(), kGroupLinks);
+  // Every file through the clean-header driver: after a failed write (a full disk) it drops the
+  // later ones, so HDF5 can still close the file (a close that fails leaves the library half shut
+  // down, and its exit handler crashed: SIGSEGV in H5F__close_cb).
+  CheckOk(H5Pset_driver(fapl.get(), CleanHeaderDriver(), nullptr), "H5Pset_driver");
   hid_t file = H5I_INVALID_HID;
   if (swmr) {
     // SWMR needs the 1.10 file format. If the file system refuses (no file locking), fall back
     // to the same format without SWMR.
     CheckOk(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_LATEST, H5F_LIBVER_LATEST),
             "H5Pset_libver_bounds");
-    CheckOk(H5Pset_driver(fapl.get(), CleanHeaderDriver(), nullptr), "H5Pset_driver");
     H5E_BEGIN_TRY {
       file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC | H5F_ACC_SWMR_WRITE, fcpl.get(), fapl.get());
     }
@@ -92,17 +95,36 @@ Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr) {
     H5E_END_TRY;
   }
   if (file < 0) {
-    // HDF5 does not say why; ask the C library for the reason.
+    // HDF5 does not say why; ask the C library whether the file can be made, and written (a full
+    // disk is a failed write, not bad input).
+    const std::string& shown = name.empty() ? path : name;
     std::string reason = "HDF5 could not create it";
     errno = 0;
     if (std::FILE* probe = std::fopen(path.c_str(), "wb")) {
+      const char block[4096] = {};
+      const bool written =
+          std::fwrite(block, 1, sizeof block, probe) == sizeof block && std::fflush(probe) == 0;
+      const int error = errno;
       std::fclose(probe);
+      if (!written) throw OutputError(shown + ": write failed (" + std::strerror(error) + ")");
     } else if (errno != 0) {
       reason = std::strerror(errno);
     }
-    throw InputError(path + ": cannot create the output file: " + reason);
+    throw InputError(shown + ": cannot create the output file: " + reason);
   }
   return Handle(file, H5Fclose);
+}
+
+void WriteNewFile(hid_t file, const std::string& name, const std::function<void()>& write) {
+  const CleanDriverState* state = CleanDriverStateOf(file);
+  try {
+    write();
+    CheckOk(H5Fflush(file, H5F_SCOPE_LOCAL), "H5Fflush " + name);
+  } catch (const std::runtime_error&) {
+    if (state == nullptr || !state->failed) throw;
+  }
+  if (state != nullptr && state->failed)
+    throw OutputError(name + ": write failed (" + std::strerror(state->error) + ")");
 }
 
 Handle IntermediateGroupsLcpl() {
@@ -390,11 +412,19 @@ void WriteXdmf(const std::string& h5_path, const std::vector<SnapshotEntry>& sna
 
   const std::string path = XdmfPath(h5_path);
   const std::string temporary = path + ".tmp";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << x.str();
-    out.close();
-    if (!out) throw std::runtime_error(temporary + ": cannot write the XDMF sidecar");
+  const std::string text = x.str();
+  errno = 0;
+  std::FILE* out = std::fopen(temporary.c_str(), "wb");
+  bool written = out != nullptr && std::fwrite(text.data(), 1, text.size(), out) == text.size();
+  int error = errno;
+  if (out != nullptr && std::fclose(out) != 0 && written) {
+    written = false;
+    error = errno;
+  }
+  if (!written) {
+    std::remove(temporary.c_str());  // no stray sidecar
+    throw std::runtime_error(path + ": write failed (" + std::strerror(error != 0 ? error : EIO) +
+                             ")");
   }
   if (std::rename(temporary.c_str(), path.c_str()) != 0) {
     throw std::runtime_error(path + ": cannot replace the XDMF sidecar: " + std::strerror(errno));
@@ -702,6 +732,33 @@ bool LockFile(int fd) {
   return ::fcntl(fd, F_OFD_SETLK, &lock) == 0 || (errno != EAGAIN && errno != EACCES);
 }
 
+std::string AnotherWriter(const std::string& path) {
+  return path +
+         ": another process (a scoopsim run?) is writing this file; give this run another -o";
+}
+
+// Opens the file at `path` for the lock (-1 with errno when it cannot be opened: ENOENT when it
+// is not there); throws sim::InputError when it is not a regular file (a device, a FIFO, a
+// folder), which an output would replace. Opened without blocking and without becoming the
+// controlling terminal, then checked again (the name may have changed in between).
+int OpenOldOutput(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return -1;
+  if (S_ISREG(st.st_mode)) {
+    const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+    if (fd < 0 || (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode))) return fd;
+    ::close(fd);  // something else took the name meanwhile
+  }
+  const char* kind = S_ISDIR(st.st_mode)    ? "a folder"
+                     : S_ISCHR(st.st_mode)  ? "a character device"
+                     : S_ISBLK(st.st_mode)  ? "a block device"
+                     : S_ISFIFO(st.st_mode) ? "a FIFO (named pipe)"
+                     : S_ISSOCK(st.st_mode) ? "a socket"
+                                            : "not a regular file";
+  throw InputError(path + ": expected a regular file or a new path to write the output, got " +
+                   kind);
+}
+
 // Puts the new file `temporary` (written, flushed and locked by this process) in place at
 // `path`, refusing when another process writes `path`: a new name is taken with link() (fails if
 // the name exists), an existing file is locked first, then replaced with rename(); either step
@@ -715,14 +772,12 @@ int PutInPlace(const std::string& temporary, const std::string& path) {
       return -1;
     }
     if (errno != EEXIST && errno != EPERM && errno != ENOTSUP) break;
-    const int old = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+    const int old = OpenOldOutput(path);
     if (old < 0 && errno == ENOENT) continue;  // gone meanwhile: take the name again
     if (old < 0) break;
     if (!LockFile(old)) {
       ::close(old);
-      throw InputError(path +
-                       ": another process (a scoopsim run?) is writing this file; give "
-                       "this run another -o");
+      throw InputError(AnotherWriter(path));
     }
     if (::rename(temporary.c_str(), path.c_str()) == 0) return old;
     ::close(old);
@@ -732,6 +787,25 @@ int PutInPlace(const std::string& temporary, const std::string& path) {
 }
 
 }  // namespace
+
+void CheckOutputPath(const std::string& path) {
+  const int fd = OpenOldOutput(path);
+  if (fd < 0) return;  // a new path (or one the write will say why it cannot take)
+  const bool free = LockFile(fd);
+  ::close(fd);  // (releases the lock: the only descriptor of its open file description)
+  if (!free) throw InputError(AnotherWriter(path));
+}
+
+void PlaceOutput(const std::string& temporary, const std::string& path) {
+  try {
+    const int old = PutInPlace(temporary, path);
+    if (old >= 0) ::close(old);
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw;
+  }
+}
 
 H5Output::H5Output(const std::string& path, const std::string& scene_yaml,
                    const std::string& version, double flush_seconds, const OutputCursor* resume)
@@ -743,7 +817,7 @@ H5Output::H5Output(const std::string& path, const std::string& scene_yaml,
   // old file or a valid new one at `path`, and a second writer of `path` is refused.
   const std::string temporary = path + "." + std::to_string(::getpid()) + ".new";
   try {
-    m.file = h5::CreateFile(temporary, /*swmr=*/true, &m.swmr);
+    m.file = h5::CreateFile(temporary, /*swmr=*/true, &m.swmr, path);
     m.driver = h5::CleanDriverStateOf(m.file.get());
     m.root =
         h5::Handle(h5::CheckId(H5Gopen2(m.file.get(), "/", H5P_DEFAULT), "H5Gopen2 /"), H5Gclose);

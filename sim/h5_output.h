@@ -128,6 +128,19 @@ class H5Output {
   std::unique_ptr<Impl> impl_;
 };
 
+// Every output file (a run's, a bed, a study's, a sweep's case file and table, the wrench table
+// and its CSV) is refused where an output cannot go, before any work and again when it is put in
+// place: a path that exists and is not a regular file (a device, a FIFO, a folder: writing
+// would replace it), or a file another process writes. The writers share one lock: an
+// open-file-description write lock (fcntl F_OFD_SETLK) on the file at the path, which H5Output
+// holds from its constructor to Close() and a file put in place by PlaceOutput only while it
+// replaces the old one.
+// Throws sim::InputError naming `path` when it cannot be an output.
+void CheckOutputPath(const std::string& path);
+// Puts the file `temporary` (written and closed) in place at `path` with rename(), refused as
+// CheckOutputPath (sim::InputError); on any failure `temporary` is removed.
+void PlaceOutput(const std::string& temporary, const std::string& path);
+
 // Graceful stop on SIGINT/SIGTERM: the handler only sets a flag (volatile sig_atomic_t); the run
 // loop polls StopRequested(), closes its output and exits. A second signal of either kind
 // terminates the process at once (default action). SIGXFSZ is ignored: a write past the file

@@ -7,6 +7,7 @@
 #include <hdf5.h>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -59,13 +60,15 @@ void CheckOk(herr_t status, const std::string& what);
 // Creates the parent folders of `path`; throws sim::InputError naming the path on failure.
 void MakeParentFolders(const std::string& path);
 
-// Creates the parent folders of `path` and the file itself (truncating). With `swmr`, the file
-// uses the 1.10 format, single-writer/multiple-reader mode and the clean-header driver, which
-// keeps everything flushed readable by any reader after a SIGKILL (see H5Output); *got_swmr says
-// whether that mode could be had. Turns off HDF5's printing of its error stack (every call is
-// checked and reported on one line). Throws sim::InputError naming the path when the file cannot
-// be created.
-Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr);
+// Creates the parent folders of `path` and the file itself (truncating), through the clean-header
+// driver (below: a failed write, a full disk, leaves HDF5 able to close the file). With `swmr`,
+// the file uses the 1.10 format and single-writer/multiple-reader mode, which keeps everything
+// flushed readable by any reader after a SIGKILL (see H5Output); *got_swmr says whether that mode
+// could be had. Turns off HDF5's printing of its error stack (every call is checked and reported
+// on one line). Throws sim::InputError naming the file when it cannot be created, and
+// sim::OutputError when it cannot be written (a full disk). Messages name it `name` (the output a
+// temporary file will become), or `path` when that is empty.
+Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr, const std::string& name = "");
 
 // Link-creation properties that create missing intermediate groups ("/series/scoop/force").
 Handle IntermediateGroupsLcpl();
@@ -98,6 +101,10 @@ struct CleanDriverState {
 };
 // That of an open file of this driver, live until the file is closed; nullptr for another driver.
 const CleanDriverState* CleanDriverStateOf(hid_t file);
+// Runs `write` on `file` (made by CreateFile, not SWMR) and flushes it. When a write failed
+// (a full disk, the file size limit), throws sim::OutputError "NAME: write failed (REASON)"
+// instead of HDF5's "HDF5: H5Dwrite ... failed"; the file can then be closed and removed.
+void WriteNewFile(hid_t file, const std::string& name, const std::function<void()>& write);
 
 // Root or object attributes; an existing attribute of that name is replaced. Strings are stored
 // as variable-length UTF-8.

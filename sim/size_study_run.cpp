@@ -102,6 +102,9 @@ int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options)
   }
 
   // The cases as a sweep file in DIR, run by the sweep machinery.
+  std::error_code ec;
+  if (fs::exists(options.dir, ec) && !fs::is_directory(options.dir, ec))
+    throw InputError("-o " + options.dir + ": expected the study's output folder, got a file");
   // Its path absolute and normal: a case's scene text names the sweep file, and a finished case
   // is skipped only for the same text, so `-o out/x` and `-o ./out/x/` must name it alike.
   const fs::path sweep_file =

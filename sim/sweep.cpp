@@ -696,7 +696,7 @@ void MergeParts(const SweepCase& c, const CasePaths& paths, double bed_cpu_s) {
     out.SetAttribute("sweep_bed_cpu_s", bed_cpu_s);
     out.Close();
   }
-  fs::rename(tmp, paths.h5);
+  PlaceOutput(tmp.string(), paths.h5.string());  // under the output lock (sim/h5_output.h)
 }
 
 // The status record's message while a case pours its bed, and when the pour ended it (stopped or

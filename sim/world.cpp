@@ -245,6 +245,9 @@ void World::ResumeFrom(const Checkpoint& c, std::unique_ptr<ScoopDriver> driver,
   } catch (const std::runtime_error& e) {
     throw InputError(source + ": " + e.what());
   }
+  // The run's start, as the uninterrupted run wrote it (StartDig wrote the fresh system's 0; a
+  // plain run, started already, does not start again to write it).
+  if (out_ && started_) out_->SetAttribute("start_time", t_start_);
 }
 
 void World::UseOutput(H5Output* out) {

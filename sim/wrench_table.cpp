@@ -5,15 +5,18 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <set>
 
+#include "sim/h5_output.h"
 #include "sim/internal_h5.h"
 
 namespace sim {
@@ -237,6 +240,7 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
     throw InputError("-o " + table_path + ": names a file in " + dir +
                      "/cases/, where the case files are; give another table file");
   }
+  CheckOutputPath(table_path);
   // The cases, by file name.
   const fs::path cases_dir = fs::path(dir) / "cases";
   std::vector<fs::path> files;
@@ -307,61 +311,64 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
 
   // The file, written beside and renamed into place.
   const std::string tmp = table_path + ".tmp";
-  {
-    if (fs::path(table_path).has_parent_path())
-      fs::create_directories(fs::path(table_path).parent_path());
-    h5::Handle file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-    if (!file.valid()) throw InputError(table_path + ": cannot create the table file");
+  try {
+    h5::Handle file = h5::CreateFile(tmp, /*swmr=*/false, nullptr, table_path);
     const hid_t f = file.get();
-    std::string sizes, id_text;
-    for (size_t m = 0; m < M; ++m) {
-      sizes += (m ? "\n" : "") + materials[m] + ": " + particle_size[m];
-      id_text += (m ? ", " : "") + materials[m] + "=" + std::to_string(ids[m]);
-    }
-    h5::WriteStringAttribute(f, "kind", "scoopsim wrench table");
-    h5::WriteStringAttribute(f, "version", SCOOPSIM_VERSION);
-    h5::WriteDoubleAttribute(f, "rho_step", options.rho_step_mm / 1e3);
-    h5::WriteDoubleAttribute(f, "rho_max", rho.back());
-    h5::WriteStringAttribute(f, "units", "SI: force N, torque N m, bite_depth m, rho m");
-    h5::WriteStringAttribute(f, "rho_definition", RhoDefinitionName(options.rho));
-    h5::WriteStringAttribute(
-        f, "frames",
-        "about the scoop's centre of mass; *_body: the study's body frame (X along the rotation "
-        "axis, Z up, Y = Z x X forward along the trench); *_scoop: the l_scoop frame (the "
-        "lander simulator's)");
-    h5::WriteStringAttribute(
-        f, "resample",
-        "per pass: the rows from first contact, rho taken as its running maximum (a row enters "
-        "where it raises it), linear in rho between rows onto rho_k = k * rho_step; below the "
-        "first row its value; NaN past the pass's last row (cells/rho_end)");
-    h5::WriteStringAttribute(f, "particle_size", sizes);
-    h5::WriteStringAttribute(f, "material_ids", id_text);
-    WriteStrings(f, "/materials/name", materials);
-    WriteNd(f, "/materials/id", H5T_STD_I32LE, H5T_NATIVE_INT, {M}, ids.data());
-    WriteStrings(f, "/materials/particle_size", particle_size);
-    WriteNd(f, "/bite_depth", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {B}, depths.data());
-    WriteNd(f, "/pass", H5T_STD_I32LE, H5T_NATIVE_INT, {P}, passes.data());
-    WriteNd(f, "/rho", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {R}, rho.data());
-    for (int s = 0; s < 4; ++s) {
-      WriteNd(f, std::string("/scoop/") + kSeries[s], H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
-              {M, B, P, R, 3}, series[s].data());
-    }
-    WriteNd(f, "/cells/rho_end", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {M, B, P}, rho_end.data());
-    WriteNd(f, "/cells/rows", H5T_STD_I32LE, H5T_NATIVE_INT, {M, B, P}, rows.data());
-    std::vector<std::string> names, paths, texts;
-    for (const CaseRows& c : cases) {
-      names.push_back(c.name);
-      paths.push_back((fs::path("cases") / fs::path(c.file).filename()).string());
-      texts.push_back(c.scene_yaml);
-    }
-    // (M x B) strings as a flat list of M * B: the case of each cell, "" for none.
-    WriteStrings(f, "/cells/case", cell_case);
-    WriteStrings(f, "/cases/name", names);
-    WriteStrings(f, "/cases/file", paths);
-    WriteStrings(f, "/cases/scene_yaml", texts);
+    h5::WriteNewFile(f, table_path, [&] {
+      std::string sizes, id_text;
+      for (size_t m = 0; m < M; ++m) {
+        sizes += (m ? "\n" : "") + materials[m] + ": " + particle_size[m];
+        id_text += (m ? ", " : "") + materials[m] + "=" + std::to_string(ids[m]);
+      }
+      h5::WriteStringAttribute(f, "kind", "scoopsim wrench table");
+      h5::WriteStringAttribute(f, "version", SCOOPSIM_VERSION);
+      h5::WriteDoubleAttribute(f, "rho_step", options.rho_step_mm / 1e3);
+      h5::WriteDoubleAttribute(f, "rho_max", rho.back());
+      h5::WriteStringAttribute(f, "units", "SI: force N, torque N m, bite_depth m, rho m");
+      h5::WriteStringAttribute(f, "rho_definition", RhoDefinitionName(options.rho));
+      h5::WriteStringAttribute(
+          f, "frames",
+          "about the scoop's centre of mass; *_body: the study's body frame (X along the rotation "
+          "axis, Z up, Y = Z x X forward along the trench); *_scoop: the l_scoop frame (the "
+          "lander simulator's)");
+      h5::WriteStringAttribute(
+          f, "resample",
+          "per pass: the rows from first contact, rho taken as its running maximum (a row enters "
+          "where it raises it), linear in rho between rows onto rho_k = k * rho_step; below the "
+          "first row its value; NaN past the pass's last row (cells/rho_end)");
+      h5::WriteStringAttribute(f, "particle_size", sizes);
+      h5::WriteStringAttribute(f, "material_ids", id_text);
+      WriteStrings(f, "/materials/name", materials);
+      WriteNd(f, "/materials/id", H5T_STD_I32LE, H5T_NATIVE_INT, {M}, ids.data());
+      WriteStrings(f, "/materials/particle_size", particle_size);
+      WriteNd(f, "/bite_depth", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {B}, depths.data());
+      WriteNd(f, "/pass", H5T_STD_I32LE, H5T_NATIVE_INT, {P}, passes.data());
+      WriteNd(f, "/rho", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {R}, rho.data());
+      for (int s = 0; s < 4; ++s) {
+        WriteNd(f, std::string("/scoop/") + kSeries[s], H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
+                {M, B, P, R, 3}, series[s].data());
+      }
+      WriteNd(f, "/cells/rho_end", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {M, B, P}, rho_end.data());
+      WriteNd(f, "/cells/rows", H5T_STD_I32LE, H5T_NATIVE_INT, {M, B, P}, rows.data());
+      std::vector<std::string> names, paths, texts;
+      for (const CaseRows& c : cases) {
+        names.push_back(c.name);
+        paths.push_back((fs::path("cases") / fs::path(c.file).filename()).string());
+        texts.push_back(c.scene_yaml);
+      }
+      // (M x B) strings as a flat list of M * B: the case of each cell, "" for none.
+      WriteStrings(f, "/cells/case", cell_case);
+      WriteStrings(f, "/cases/name", names);
+      WriteStrings(f, "/cases/file", paths);
+      WriteStrings(f, "/cases/scene_yaml", texts);
+    });
     if (file.reset() < 0) throw std::runtime_error("HDF5: closing " + tmp + " failed");
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);  // no stray temporary file
+    throw;
   }
-  fs::rename(tmp, table_path);
+  PlaceOutput(tmp, table_path);  // under the output lock (sim/h5_output.h)
   char summary[256];
   std::snprintf(summary, sizeof summary,
                 "%zu cases: %zu material(s), %zu bite depth(s), %zu pass(es), %zu rho nodes "
@@ -521,8 +528,10 @@ void WrenchTable::ExportCsv(const std::string& csv_path, int digits) const {
   };
   if (fs::path(csv_path).has_parent_path())
     fs::create_directories(fs::path(csv_path).parent_path());
+  CheckOutputPath(csv_path);
   const std::string tmp = csv_path + ".tmp";
   {
+    errno = 0;
     std::ofstream out(tmp, std::ios::trunc);
     if (!out) throw InputError(csv_path + ": cannot create the CSV file");
     out << "m,d,p,rho,Fx,Fy,Fz,Tx,Ty,Tz\n";
@@ -541,9 +550,14 @@ void WrenchTable::ExportCsv(const std::string& csv_path, int digits) const {
       }
     }
     out.flush();
-    if (!out) throw std::runtime_error("cannot write " + tmp);
+    if (!out) {
+      const int error = errno != 0 ? errno : EIO;
+      std::error_code ignored;
+      fs::remove(tmp, ignored);  // no stray temporary file
+      throw OutputError(csv_path + ": write failed (" + std::strerror(error) + ")");
+    }
   }
-  fs::rename(tmp, csv_path);
+  PlaceOutput(tmp, csv_path);  // under the output lock (sim/h5_output.h)
 }
 
 }  // namespace sim

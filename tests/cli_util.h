@@ -2,18 +2,25 @@
 // the tests' temporary folders (ProcessTempDir).
 #pragma once
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/mount.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace scoopsim_test {
@@ -96,6 +103,71 @@ inline int Wait(pid_t pid) {
   int status = 0;
   ::waitpid(pid, &status, 0);
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// Takes the write lock that scoopsim's writers take on an output file (an open-file-description
+// lock, fcntl F_OFD_SETLK: sim/h5_output.h), as a process writing `path` holds it: the
+// descriptor (closing it releases the lock), or -1 when the lock cannot be had.
+inline int HoldOutputLock(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  struct flock lock {};
+  lock.l_type = F_WRLCK;
+  lock.l_whence = SEEK_SET;
+  if (fd >= 0 && ::fcntl(fd, F_OFD_SETLK, &lock) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+// Paths made in `dir` that no output may replace, each with the word scoopsim's refusal uses:
+// a FIFO (mkfifo works unprivileged) and, where mknod is allowed (root), a character device
+// with /dev/null's numbers.
+inline std::vector<std::pair<std::string, std::string>> SpecialFiles(
+    const std::filesystem::path& dir) {
+  std::vector<std::pair<std::string, std::string>> made;
+  const std::string fifo = (dir / "fifo").string();
+  if (::mkfifo(fifo.c_str(), 0644) == 0) made.emplace_back(fifo, "a FIFO (named pipe)");
+  const std::string device = (dir / "device").string();
+  if (::mknod(device.c_str(), S_IFCHR | 0644, makedev(1, 3)) == 0)
+    made.emplace_back(device, "a character device");
+  return made;
+}
+
+// A tmpfs of `size` bytes ("64k") mounted on the folder `dir` (made) while this lives: a full
+// disk in miniature. Where mounting is not allowed (not root, a container without
+// CAP_SYS_ADMIN) mounted() is false and error() says why: the test skips with a message.
+class ScopedTmpfs {
+ public:
+  ScopedTmpfs(const std::filesystem::path& dir, const std::string& size) : dir_(dir) {
+    std::filesystem::create_directories(dir);
+    mounted_ = ::mount("tmpfs", dir.c_str(), "tmpfs", 0, ("size=" + size).c_str()) == 0;
+    if (!mounted_) error_ = std::strerror(errno);
+  }
+  ~ScopedTmpfs() {
+    if (mounted_) ::umount2(dir_.c_str(), MNT_DETACH);
+  }
+  ScopedTmpfs(const ScopedTmpfs&) = delete;
+  ScopedTmpfs& operator=(const ScopedTmpfs&) = delete;
+  bool mounted() const { return mounted_; }
+  const std::string& error() const { return error_; }
+
+ private:
+  std::filesystem::path dir_;
+  bool mounted_ = false;
+  std::string error_;
+};
+
+// The files in `dir` whose names end in one of the temporary suffixes scoopsim's writers use
+// (.tmp, .partial, .new, .probe): none may be left after a failed write.
+inline std::vector<std::string> TemporaryFiles(const std::filesystem::path& dir) {
+  std::vector<std::string> left;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string ext = entry.path().extension().string();
+    if (ext == ".tmp" || ext == ".partial" || ext == ".new" || ext == ".probe")
+      left.push_back(entry.path().filename().string());
+  }
+  return left;
 }
 
 }  // namespace scoopsim_test

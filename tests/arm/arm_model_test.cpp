@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "arm/internal_urdf_text.h"
 #include "tests/cli_util.h"
 
 namespace arm {
@@ -242,6 +243,91 @@ TEST(ArmModelTest, NegativeDamping) {
                   "name=\"j_shou_yaw\"",
                   "joint 'j_shou_yaw' <dynamics>: expected damping >= 0 and friction >= 0, got "
                   "damping -1 friction 2.6");
+}
+
+// Defect: a joint's parent set to a link below it (j_dist_pitch hung from l_grinder) made a loop
+// cut off from the root, which urdfdom accepts; walking up from the scoop never ended and grew
+// memory until std::bad_alloc. The loop is refused, its first joint in the file named.
+TEST(ArmModelTest, JointLoopNamesTheJoint) {
+  ExpectLoadError("loop.urdf", Edited("<parent link=\"l_dist\"/>", "<parent link=\"l_grinder\"/>"),
+                  "<joint name=\"j_dist_pitch\"",
+                  "joint 'j_dist_pitch' <parent>: expected the links to form a tree (no link its "
+                  "own ancestor), got a loop through joints j_dist_pitch, j_hand_yaw, j_grinder");
+}
+
+// Defect: a link that is the child of two joints was taken silently (urdfdom keeps one of them,
+// by name). The second joint in the file is named.
+TEST(ArmModelTest, LinkWithTwoParentsNamesTheSecondJoint) {
+  const std::string extra =
+      "  <joint name=\"j_extra\" type=\"fixed\">\n    <parent link=\"l_shou\"/>\n"
+      "    <child link=\"l_grinder\"/>\n  </joint>\n</robot>";
+  ExpectLoadError("two_parents.urdf", Edited("</robot>", extra), "<joint name=\"j_extra\"",
+                  "joint 'j_extra' <child>: expected a link with one parent joint (the links a "
+                  "tree), got link 'l_grinder', already the child of joint 'j_grinder'");
+}
+
+// The lander's URDF with ~8 MB of comment before its first link; the comment opens a tag it never
+// closes ("<link xxx...", as a commented-out element would).
+std::string HugeUrdf(const std::string& text) {
+  const size_t at = text.find("<link name=\"base_link\">");
+  std::string comment = "<!-- <link ";
+  for (int k = 0; k < 100000; ++k) comment += std::string(79, 'x') + "\n";
+  return text.substr(0, at) + comment + " -->\n" + text.substr(at);
+}
+
+// Defect: each message's line was found by a regex search over the whole text, once per element
+// looked up (a 64 MB URDF took 52 s, 200 MB did not end in 300 s), and the regex recursed once a
+// character through a long tag (SIGSEGV on the URDF above). The index reads the text once, by
+// construction: it answers with the text gone, and the comment's tag is not an element.
+TEST(ArmModelTest, UrdfIndexReadsTheTextOnce) {
+  std::string text = HugeUrdf(LanderUrdf());
+  ASSERT_GT(text.size(), 8000000u);
+  const int joint_line = LineContaining(text, "<joint name=\"j_hand_yaw\"");
+  const size_t link_at = text.find("<link name=\"l_hand\">");
+  const size_t link_end = text.find("</link>", link_at) + 7;
+  const UrdfIndex index(text);
+  text.assign(text.size(), '?');  // the index keeps no reference to the text
+  EXPECT_EQ(index.Line("joint", "j_hand_yaw"), joint_line);
+  EXPECT_EQ(index.Span("link", "l_hand"), std::make_pair(link_at, link_end));
+  EXPECT_EQ(index.Line("link", "base_link"),
+            LineContaining(HugeUrdf(LanderUrdf()), "<link name=\"base_link\""));
+  EXPECT_EQ(index.Line("joint", "j_none"), 0);
+  EXPECT_EQ(index.Span("link", "xxx").first, std::string::npos);
+}
+
+// The attributes as written, read from one element's text: the first <child> with the attribute,
+// a '>' inside a quoted value kept, a commented-out element skipped, nothing past `end`.
+TEST(ArmModelTest, AttributeInReadsOneElement) {
+  const std::string text =
+      "<link name=\"a\"><!-- <mass value=\"old\"/> --><mass/><mass value='1>2'/></link>"
+      "<link name=\"b\"><mass value=\"3\"/></link>";
+  const UrdfIndex index(text);
+  const auto [a0, a1] = index.Span("link", "a");
+  EXPECT_EQ(AttributeIn(text, a0, a1, "mass", "value"), "1>2");
+  EXPECT_EQ(AttributeIn(text, a0, a1, "inertia", "ixx"), "");
+  const auto [b0, b1] = index.Span("link", "b");
+  EXPECT_EQ(AttributeIn(text, b0, b1, "mass", "value"), "3");
+  EXPECT_EQ(b1, text.size());
+}
+
+// The same URDF end to end, a joint after the comment made bad: the message names its line, as
+// for a small file; and a URDF over the size cap is refused with the cap in the message.
+TEST(ArmModelTest, HugeUrdfNamesTheLineAndTheCap) {
+  const std::string text =
+      HugeUrdf(Edited("effort=\"25.7\" velocity=\"0.2\"/>\n    <dynamics damping=\"50\" "
+                      "friction=\"0.3\"/>\n  </joint>\n\n  <link name=\"l_hand\">",
+                      "effort=\"0\" velocity=\"0.2\"/>\n    <dynamics damping=\"50\" "
+                      "friction=\"0.3\"/>\n  </joint>\n\n  <link name=\"l_hand\">"));
+  ExpectLoadError("huge.urdf", text, "name=\"j_hand_yaw\"",
+                  "joint 'j_hand_yaw' <limit>: expected effort (the torque limit) > 0 N m, got 0");
+  ASSERT_NO_THROW(ParseArmModel(HugeUrdf(LanderUrdf()), "huge"));
+  try {
+    ParseArmModel(std::string(65 << 20, ' '), "too_big.urdf");
+    ADD_FAILURE() << "a URDF over the cap was read";
+  } catch (const ArmModelError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "too_big.urdf: URDF text: expected at most 64 MiB of URDF, got 65 MiB");
+  }
 }
 
 }  // namespace

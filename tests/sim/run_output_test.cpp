@@ -2,9 +2,10 @@
 // sim/h5_output.cpp), end to end through the binary on tiny_dig (1450 spheres): a run SIGKILLed
 // at random moments leaves a file that plain HDF5 readers open (C API, h5py, h5dump) holding a
 // prefix of the uninterrupted run's rows, at least those a reader saw before the kill; a second
-// run given the same output and `-o` naming the scene's own bed are refused before any work; a
-// full disk (the file size limit, RLIMIT_FSIZE) gives one line and a file whose row counts are
-// true; a pour stopped by SIGINT or SIGKILL is kept and the same command goes on from it.
+// run given the same output, a bed over an output being written, `-o` naming a FIFO or a device
+// and `-o` naming the scene's own bed are refused before any work; a full disk (the file size
+// limit, RLIMIT_FSIZE, or a 64 KiB tmpfs) gives one line and a file whose row counts are true; a
+// pour stopped by SIGINT or SIGKILL is kept and the same command goes on from it.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <signal.h>
@@ -233,6 +234,49 @@ TEST_F(RunOutputTest, SecondWriterIsRefused) {
   EXPECT_EQ(ReadRows(out, "/scoop/collected_mass").rows, 1) << "the pass did not end";
 }
 
+// Defect: `-o` naming a FIFO or a device (run, bed) replaced it with a regular file and exited 0
+// (as root, writing over /dev/full did that). Refused before any work, exit 2, one line; the node
+// is left as it was.
+TEST_F(RunOutputTest, OutputThatIsNotARegularFileIsRefused) {
+  const fs::path dir = TempDir() / "special";
+  fs::create_directories(dir);
+  const auto nodes = scoopsim_test::SpecialFiles(dir);
+  ASSERT_FALSE(nodes.empty()) << "mkfifo failed";
+  if (nodes.size() < 2) std::fprintf(stderr, "no character device made (not root): FIFO only\n");
+  for (const auto& [path, kind] : nodes) {
+    for (const char* command : {"run", "bed"}) {
+      SCOPED_TRACE(std::string(command) + " -o " + path);
+      const std::string log = (TempDir() / "special.log").string();
+      EXPECT_EQ(Wait(Spawn({command, Scene(), "-o", path}, log)), 2);
+      const std::vector<std::string> lines = Lines(ReadText(log));
+      ASSERT_EQ(lines.size(), 1u) << ReadText(log);
+      EXPECT_EQ(lines[0], "scoopsim: " + path +
+                              ": expected a regular file or a new path to write the output, got " +
+                              kind);
+      EXPECT_FALSE(fs::is_regular_file(path)) << "replaced";
+    }
+  }
+}
+
+// Defect: `scoopsim bed -o X` while a run wrote X exited 0 and X held the bed; the run's rows
+// were lost. Every writer takes the run's lock: with the lock held (as a run writing X holds it),
+// bed is refused before any work, exit 2, one line, X untouched.
+TEST_F(RunOutputTest, BedOverAnOutputBeingWrittenIsRefused) {
+  const std::string out = (TempDir() / "being_written.h5").string();
+  std::ofstream(out) << "a run's rows";
+  const int lock = scoopsim_test::HoldOutputLock(out);
+  ASSERT_GE(lock, 0);
+  const std::string log = (TempDir() / "locked.log").string();
+  EXPECT_EQ(Wait(Spawn({"bed", Scene(), "-o", out}, log)), 2);
+  ::close(lock);
+  const std::vector<std::string> lines = Lines(ReadText(log));
+  ASSERT_EQ(lines.size(), 1u) << ReadText(log);
+  EXPECT_EQ(lines[0], "scoopsim: " + out +
+                          ": another process (a scoopsim run?) is writing this file; give this "
+                          "run another -o");
+  EXPECT_EQ(ReadText(out), "a run's rows");
+}
+
 // `-o` naming the scene's own bed.file (by another spelling too) is refused, exit 2, one line,
 // the bed untouched.
 TEST_F(RunOutputTest, OutputOverTheRunsOwnBedIsRefused) {
@@ -291,6 +335,23 @@ TEST_F(RunOutputTest, FullDiskGivesOneLineAndTrueRowCounts) {
               std::string::npos)
         << line;
   }
+}
+
+// Defect: a full disk (a 64 KiB tmpfs) while the pour's keep file was saved ended in SIGSEGV
+// (exit 139) inside HDF5's shutdown, after a line blaming H5Fclose. Now: exit 1, one line naming
+// the file and "No space left on device", no temporary file left.
+TEST_F(RunOutputTest, FullDiskWhileThePourIsKeptGivesOneLine) {
+  const fs::path small = TempDir() / "small_disk";
+  const scoopsim_test::ScopedTmpfs tmpfs(small, "64k");
+  if (!tmpfs.mounted()) GTEST_SKIP() << "cannot mount a 64 KiB tmpfs here: " << tmpfs.error();
+  const std::string scene = WriteScene("tiny_dig_full_disk.yaml", "", 0.02);
+  const std::string log = (TempDir() / "full_disk.log").string();
+  EXPECT_EQ(Wait(Spawn({"run", scene, "-o", (small / "out.h5").string()}, log)), 1);
+  const std::vector<std::string> lines = Lines(ReadText(log));
+  ASSERT_EQ(lines.size(), 1u) << ReadText(log);
+  EXPECT_EQ(lines[0], "scoopsim: error: " + (small / "out.pour.h5").string() +
+                          ": write failed (No space left on device)");
+  EXPECT_EQ(scoopsim_test::TemporaryFiles(small), std::vector<std::string>{});
 }
 
 // A pour SIGKILLed and then SIGINTed keeps the bed poured so far beside the output (a loadable

@@ -537,6 +537,17 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
       EXPECT_NE(text.find(done), std::string::npos) << text;
     ExpectSameData(plain / "table.h5", resumed / "table.h5");
     ExpectSameData(plain / "cases" / "snow_b10.h5", resumed / "cases" / "snow_b10.h5", "sweep");
+    // The root attributes of the dig (a pass resumed from a checkpoint wrote start_time 0).
+    for (const char* name : {"start_time", "surface", "scoop_mass", "time"}) {
+      const double want =
+          sim::SavedRun((plain / "cases" / "snow_b10.h5").string()).RootNumber(name, -1);
+      EXPECT_GT(want, 0) << name;
+      EXPECT_EQ(sim::SavedRun((resumed / "cases" / "snow_b10.h5").string()).RootNumber(name, -1),
+                want)
+          << name;
+    }
+    EXPECT_EQ(RootString(resumed / "cases" / "snow_b10.h5", "state_hash"),
+              RootString(plain / "cases" / "snow_b10.h5", "state_hash"));
     EXPECT_FALSE(fs::exists(resumed / "cases" / "snow_b10.parts"));
     return text;
   };
@@ -570,6 +581,16 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
         });
     EXPECT_NE(text.find("snow_b10 goes on from"), std::string::npos) << text;
     EXPECT_NE(text.find("(resumed at pass 2)"), std::string::npos) << text;
+  }
+  {
+    // Defect: the case file of a first pass resumed from its checkpoint had start_time 0.
+    SCOPED_TRACE("killed mid-pass 1: it goes on from its last checkpoint");
+    const std::string text = kill_and_resume(
+        "resumed_pass1", "1:0.3", "0.02", [](const fs::path& parts, const sim::CaseStatus& status) {
+          EXPECT_EQ(status.passes_done, 0);
+          EXPECT_TRUE(fs::exists(parts / "pass_1.restart.h5"));
+        });
+    EXPECT_NE(text.find("snow_b10 goes on from"), std::string::npos) << text;
   }
   {
     SCOPED_TRACE("killed in the pour: it goes on from its last keep");

@@ -359,4 +359,37 @@ TEST(WrenchTableRho, PathByDefaultEvery2mmAndAlongOnRequest) {
   }
 }
 
+// Defect: `table export-csv -o` (and `table build -o`) naming a FIFO or a device replaced it
+// with a regular file and exited 0; a table file another process writes was replaced too. Each
+// is refused, exit 2, one line naming the file; the node or the file is left as it was.
+TEST_F(WrenchTableTest, OutputsThatCannotBeWrittenAreRefused) {
+  const fs::path dir = dir_ / "special";
+  fs::create_directories(dir);
+  auto nodes = scoopsim_test::SpecialFiles(dir);
+  ASSERT_FALSE(nodes.empty()) << "mkfifo failed";
+  const std::string locked = (dir / "locked").string();
+  std::ofstream(locked) << "another writer's";
+  const int lock = scoopsim_test::HoldOutputLock(locked);
+  ASSERT_GE(lock, 0);
+  nodes.emplace_back(locked, "");
+  for (const auto& [path, kind] : nodes) {
+    for (const std::string& command : {"table export-csv " + table_path_ + " -o " + path,
+                                       "table build " + dir_.string() + " -o " + path}) {
+      SCOPED_TRACE(command);
+      const std::string log = (dir / "refused.log").string();
+      EXPECT_EQ(scoopsim_test::RunScoopsim(command, log), 2);
+      const std::string expected =
+          kind.empty()
+              ? path +
+                    ": another process (a scoopsim run?) is writing this file; give "
+                    "this run another -o"
+              : path + ": expected a regular file or a new path to write the output, got " + kind;
+      EXPECT_EQ(scoopsim_test::ReadText(log), "scoopsim: " + expected + "\n");
+    }
+    EXPECT_EQ(fs::is_regular_file(path), kind.empty()) << path;
+  }
+  ::close(lock);
+  EXPECT_EQ(scoopsim_test::ReadText(locked), "another writer's");
+}
+
 }  // namespace
