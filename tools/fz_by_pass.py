@@ -44,22 +44,14 @@ def rotate(q, v):
 
 
 def row_segments(pose):
-    """The segment name of every row ("descent", "rotation 1", "push", "rotation 2", ...)."""
-    theta, _ = plot_wrench.pitch(pose)
-    step = np.diff(pose[:, :3], axis=0, prepend=pose[:1, :3])
-    d_theta = np.abs(np.diff(theta, prepend=theta[:1]))
-    horizontal = np.hypot(step[:, 0], step[:, 1])
-    vertical = np.abs(step[:, 2])
-    kind = np.where(d_theta > 1e-6, "rotation",
-                    np.where(np.maximum(horizontal, vertical) < 1e-9, "hold",
-                             np.where(vertical > horizontal, "descent", "push")))
-    names, count, last = [], {}, None
-    for k in kind:
-        if k != last:
-            count[k] = count.get(k, 0) + 1
-            last = k
-        names.append(k if k != "rotation" else "rotation %d" % count[k])
-    return np.array(names)
+    """The segment name of every row ("descent", "rotation 1", "push", "rotation 2", ...): that of
+    the step into it (plot_wrench.segment_runs; row 0 that of the first step)."""
+    names = np.full(len(pose), "", dtype=object)
+    for name, first, steps in plot_wrench.segment_runs(pose):
+        names[first + 1:first + 1 + steps] = name
+        if first == 0:
+            names[0] = name
+    return names
 
 
 def analyse(path):

@@ -129,9 +129,10 @@ def pitch(pose):
     return np.arctan2(-ex[:, 2], np.hypot(ex[:, 0], ex[:, 1])), norm > 0
 
 
-def segments(pose, rho_mm):
-    """[(name, rho_mm at its start)] of the trajectory's segments (see the module's doc), or []
-    without poses."""
+def segment_runs(pose):
+    """[(name, first step, steps)] of the trajectory's segments (see the module's doc), step k
+    going from row k to row k + 1, named "descent", "push", "hold", "rotation" or, when a kind
+    comes more than once, "rotation 1", "rotation 2", ...; [] without valid poses."""
     if pose is None or len(pose) < 3:
         return []
     theta, valid = pitch(pose)
@@ -160,11 +161,17 @@ def segments(pose, rho_mm):
     for kind, _, _ in merged:
         totals[kind] = totals.get(kind, 0) + 1
     seen = {}
-    named = []
-    for kind, first, _ in merged:
+    runs = []
+    for kind, first, steps in merged:
         seen[kind] = seen.get(kind, 0) + 1
-        name = kind if totals[kind] == 1 else "%s %d" % (kind, seen[kind])
-        named.append((name, float(rho_mm[first])))
+        runs.append((kind if totals[kind] == 1 else "%s %d" % (kind, seen[kind]), first, steps))
+    return runs
+
+
+def segments(pose, rho_mm):
+    """[(name, rho_mm at its start)] of the trajectory's segments (see the module's doc), or []
+    without poses."""
+    named = [(name, float(rho_mm[first])) for name, first, _ in segment_runs(pose)]
     # Before first contact rho is 0: keep only the segment in force when contact begins; a
     # segment over which rho does not move (a hold at the push's end) gives way to the next.
     before = [m for m in named if m[1] <= 0]
