@@ -70,6 +70,7 @@ class Recorder : public sim::ScoopDriver {
   double PlannedDuration(int pass, const sim::BedContext& bed) const override {
     return inner_->PlannedDuration(pass, bed);
   }
+  void Record(sim::H5Output* out, double time) override { inner_->Record(out, time); }
   void Finish(sim::H5Output* out) override { inner_->Finish(out); }
   sim::ScoopDriver* inner() { return inner_.get(); }
   std::vector<dem::Vec3> force, torque;
