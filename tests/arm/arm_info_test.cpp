@@ -31,9 +31,10 @@ TEST(ArmInfoTest, PrintsTheLanderArm) {
 }
 
 // The lander's own arm with its grinder and tool frames (tests/arm/data/lander_own_arm.urdf):
-// exit 0, one line per merge, the grinder held, and the torques with 6 significant digits (the
-// zero pose's j_shou_pitch, computed with the shipped URDF that has the same masses: -37.0389 at
-// 3 decimals was all that showed before).
+// exit 0, one line per merge, the grinder held, and the torques with 6 significant digits: the
+// zero pose's j_prox_pitch 12.2734 N m and j_dist_pitch 1.24286 N m (GravityTorques, checked
+// against an independent moment sum in kinematics_test.cpp), which "%.3f" showed as 12.273 and
+// 1.243.
 TEST(ArmInfoTest, PrintsTheLanderOwnArmWithItsMerges) {
   const auto dir = scoopsim_test::ProcessTempDir("arm_info_own");
   const std::string out = (dir / "out.txt").string();
@@ -47,7 +48,8 @@ TEST(ArmInfoTest, PrintsTheLanderOwnArmWithItsMerges) {
         "and inertia dropped)\n",
         "merged: l_scoop_tip (0.001 kg, fixed joint l_scoop_tip_joint) into l_scoop: a frame "
         "(mass and inertia dropped)\n",
-        "held at zero (off the chain): j_grinder", "moving 30.2759 kg", "6 significant digits"}) {
+        "held at zero (off the chain): j_grinder", "moving 30.2759 kg", "6 significant digits",
+        " 12.2734 ", " 1.24286 "}) {
     EXPECT_NE(text.find(s), std::string::npos) << s << "\n" << text;
   }
   size_t lines = 0;
