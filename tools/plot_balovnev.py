@@ -97,7 +97,8 @@ def main():
     if notes:
         title += "\n" + notes[0]
     fig.suptitle(title, fontsize=10)
-    caption = "\n".join(notes[1:2])
+    caption = "\n".join(notes[1:2] + ([n for n in notes if n.startswith("lander_*")][:1]
+                                       if args.model != "textbook" else []))
     if caption:
         fig.text(0.01, 0.005, caption, fontsize=7, va="bottom", wrap=True)
     fig.tight_layout(rect=(0, 0.04, 1, 1))
