@@ -126,11 +126,9 @@ Inertial LinkInertial(const urdf::Inertial& in) {
   return out;
 }
 
-// Checks a link's inertial: finite, mass > 0, inertia symmetric positive definite with principal
-// moments obeying the triangle inequality (a real body's do).
-void CheckInertial(const Reporter& report, const std::string& link, const urdf::Inertial& in) {
-  // Values as written first: urdfdom reads "abc" (or "") as 0, which the checks below would
-  // report as "got 0".
+// Checks that a link's mass and inertia are numbers as written: urdfdom reads "abc" (or "") as 0,
+// which the checks of CheckInertial would report as "got 0".
+void CheckWrittenNumbers(const Reporter& report, const std::string& link) {
   const std::pair<const char*, const char*> written[] = {
       {"mass", "value"},  {"inertia", "ixx"}, {"inertia", "ixy"}, {"inertia", "ixz"},
       {"inertia", "iyy"}, {"inertia", "iyz"}, {"inertia", "izz"}};
@@ -146,6 +144,11 @@ void CheckInertial(const Reporter& report, const std::string& link, const urdf::
                   "expected a number, got '" + raw + "'");
     }
   }
+}
+
+// Checks a link's inertial: finite, mass > 0, inertia symmetric positive definite with principal
+// moments obeying the triangle inequality (a real body's do).
+void CheckInertial(const Reporter& report, const std::string& link, const urdf::Inertial& in) {
   const double values[] = {in.mass, in.ixx, in.ixy, in.ixz, in.iyy, in.iyz, in.izz};
   for (double v : values) {
     if (!std::isfinite(v)) {
@@ -453,16 +456,35 @@ ArmModel ParseArmModel(const std::string& urdf_text, const std::string& source,
     Body& body = model.bodies[b];
     const bool is_body_link = (l == link);
     const bool moving = b > 0;
+    // A merged link without an <inertial> or of at most kFrameMass is a frame (arm_model.h).
+    if (link->inertial) CheckWrittenNumbers(report, link->name);
+    const double mass = link->inertial ? link->inertial->mass : 0;
+    const bool is_frame = !is_body_link && (!link->inertial || (mass >= 0 && mass <= kFrameMass));
     if (!link->inertial) {
       if (moving && is_body_link) {
         report.Fail("link", link->name, "link '" + link->name + "'",
                     "expected an <inertial> on every link a chain joint moves (" + root->name +
                         " -> " + tip_link + "), got none");
       }
-    } else if (moving) {
+    } else if (moving && !is_frame) {
       CheckInertial(report, link->name, *link->inertial);
+      if (is_body_link && mass <= kFrameMass) {
+        report.Fail("link", link->name, "link '" + link->name + "' <mass>",
+                    "expected a mass > " + Num(kFrameMass) +
+                        " kg on a link a chain joint moves (a lighter link is a frame, allowed "
+                        "on fixed joints only), got " +
+                        Num(mass));
+      }
     }
-    if (link->inertial) Merge(&body.inertial, Transformed(LinkInertial(*link->inertial), in_body));
+    if (link->inertial && !is_frame) {
+      Merge(&body.inertial, Transformed(LinkInertial(*link->inertial), in_body));
+    }
+    if (!is_body_link) {
+      const urdf::Joint& j = *link->parent_joint;
+      model.merges.push_back({link->name, body.link, j.name,
+                              j.type == urdf::Joint::FIXED ? "fixed" : "held", is_frame,
+                              link->inertial != nullptr, mass});
+    }
     Frame frame{link->name, in_body};
     if (is_body_link) {
       body.frames.insert(body.frames.begin(), frame);

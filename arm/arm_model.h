@@ -8,6 +8,15 @@
 // (the URDF root link); bodies[i] (i = 1..n) is moved by joints[i - 1]. A body's frame is the URDF
 // frame of its own link; a merged link keeps its place as a Frame of the body.
 //
+// Frames (the merge rule, as Gazebo and KDL treat such links): a link hung on its body through
+// fixed (or held) joints whose <inertial> is missing or has a mass of at most kFrameMass (1 g) is
+// a frame: it keeps its place (a Frame of the body) but adds no mass and no inertia, and its
+// inertial is not checked (the lander's l_scoop_tip: 0.001 kg with a 1 kg m^2 placeholder inertia
+// that would otherwise swamp the 0.31 kg scoop's; tool frames such as l_grinder_tip with none or a
+// zero mass). Heavier links are merged with their mass and inertia (the grinder). A link that a
+// chain joint moves itself must have an <inertial> with a mass above kFrameMass, else the load is
+// refused naming it. Every link merged into another's body is listed in ArmModel::merges.
+//
 // Off-chain joints: a `revolute`, `continuous` or `prismatic` joint that is not on the path from
 // the root to the tip is held at zero and its child merged like a fixed one (it is listed in
 // ArmModel::held_joints). On the chain only `revolute` and `continuous` are supported.
@@ -70,6 +79,20 @@ struct Body {
   std::vector<Shape> shapes;  // shapes of all its links, in the body frame
 };
 
+// The heaviest link that is still a frame (see the merge rule above) [kg].
+constexpr double kFrameMass = 1e-3;
+
+// A link merged into the body of another (through fixed or held joints).
+struct MergedLink {
+  std::string link;           // the merged link
+  std::string body_link;      // the link of the body it went to
+  std::string joint;          // the joint that hangs it on its parent
+  std::string joint_type;     // "fixed", or "held" (an off-chain movable joint held at zero)
+  bool frame = false;         // a frame: mass and inertia dropped (see the merge rule)
+  bool has_inertial = false;  // it had an <inertial>
+  double mass = 0;            // its mass as written [kg] (0 without an <inertial>)
+};
+
 struct Joint {
   std::string name;
   JointType type = JointType::kRevolute;
@@ -93,6 +116,7 @@ struct ArmModel {
   std::vector<Body> bodies;   // bodies[0] the fixed base; bodies[i] moved by joints[i - 1]
   std::vector<Joint> joints;  // the chain from the base to the tip, n = dof()
   std::vector<std::string> held_joints;  // off-chain movable joints held at zero
+  std::vector<MergedLink> merges;        // every link merged into another's body, by name
 
   int dof() const { return static_cast<int>(joints.size()); }
   // Mass of the moving bodies (the base excluded) [kg].

@@ -124,6 +124,22 @@ struct FaultStep {
   bool new_command = false;  // this sample issued a stronger reaction (see command())
 };
 
+// The fault bits one output row shows: every bit active at any sample since the previous row
+// (the OR over the interval), so that a fault the reaction clears within one row still shows.
+class RowFaultBits {
+ public:
+  void Add(uint64_t active) { bits_ |= active; }
+  // The bits since the last Take(), then starts over.
+  uint64_t Take() {
+    const uint64_t bits = bits_;
+    bits_ = 0;
+    return bits;
+  }
+
+ private:
+  uint64_t bits_ = 0;
+};
+
 class FaultMonitor {
  public:
   // Limits from the model; throws std::invalid_argument for an ft_joint not in the chain.

@@ -104,7 +104,8 @@ struct ArmDriver::Impl {
   Eigen::VectorXd q_ref, qd_ref, demanded, applied;
   arm::JointServo servo;  // the PID's step with its D term implicit (arm.d_term: implicit)
   arm::ArmSample sample;
-  uint64_t active = 0;
+  uint64_t active = 0;             // fault conditions true at the last step
+  arm::RowFaultBits active_since;  // OR of `active` over the steps since the last /arm/ row
   double next_ft = 0;
   Eigen::Vector3d ft_force = Eigen::Vector3d::Zero(), ft_torque = Eigen::Vector3d::Zero();
   double tracking = 0;  // last tracking error [m]
@@ -415,6 +416,7 @@ struct ArmDriver::Impl {
     sample.ft_torque = ft_torque;
     const arm::FaultStep step = monitor->Update(sample);
     active = step.active;
+    active_since.Add(step.active);
     if (step.new_events > 0) {
       const auto& events = monitor->events();
       for (size_t e = events.size() - step.new_events; e < events.size(); ++e) {
@@ -572,10 +574,11 @@ void ArmDriver::Record(H5Output* out, double time) {
   const double ft[6] = {a.ft_force.x(),  a.ft_force.y(),  a.ft_force.z(),
                         a.ft_torque.x(), a.ft_torque.y(), a.ft_torque.z()};
   out->AppendRow("/arm/ft_sensor", ft, 6);
-  const double bits = static_cast<double>(a.active);
+  // Every bit active at any step since the previous row: a fault that the stop reaction clears
+  // within one row still shows.
+  const uint64_t bits = a.active_since.Take() | a.active;  // the row's instant counts too
   out->AppendRow("/arm/fault_bits", &bits, 1);
-  const double latched = static_cast<double>(a.report.latched);
-  out->AppendRow("/arm/fault_latched", &latched, 1);
+  out->AppendRow("/arm/fault_latched", &a.report.latched, 1);
   out->AppendRow("/arm/tracking_error", &a.tracking, 1);
 }
 
@@ -617,12 +620,30 @@ void ArmDriver::Finish(H5Output* out) {
            e.joint >= 0 && e.joint < n ? r.joints[e.joint].c_str() : "-", e.value, e.limit);
   if (r.events.empty()) Status("scoopsim: arm: no fault\n");
   if (!out) return;
-  std::vector<double> events;
-  for (const ArmReport::Event& e : r.events)
-    events.insert(events.end(), {e.time, static_cast<double>(e.flag), static_cast<double>(e.joint),
-                                 e.value, e.limit});
-  for (size_t e = 0; e < r.events.size(); ++e)
-    out->AppendRow("/arm/fault_events", &events[5 * e], 5);
+  // The events as one table, always written (zero rows without a fault).
+  using Column = H5Output::TableColumn;
+  std::vector<Column> columns;
+  for (const auto& [name, kind] : {std::pair{"time", Column::Kind::kFloat64},
+                                   {"flag", Column::Kind::kUint64},
+                                   {"flag_name", Column::Kind::kText},
+                                   {"joint", Column::Kind::kInt32},
+                                   {"joint_name", Column::Kind::kText},
+                                   {"value", Column::Kind::kFloat64},
+                                   {"limit", Column::Kind::kFloat64}}) {
+    columns.emplace_back();
+    columns.back().name = name;
+    columns.back().kind = kind;
+  }
+  for (const ArmReport::Event& e : r.events) {
+    columns[0].float64.push_back(e.time);
+    columns[1].uint64.push_back(e.flag);
+    columns[2].text.push_back(arm::FaultName(e.flag));
+    columns[3].int32.push_back(e.joint);
+    columns[4].text.push_back(e.joint >= 0 && e.joint < n ? r.joints[e.joint] : "-");
+    columns[5].float64.push_back(e.value);
+    columns[6].float64.push_back(e.limit);
+  }
+  out->WriteTable("/arm/fault_events", columns, static_cast<int64_t>(r.events.size()));
   out->SetAttribute("arm_fault_events", static_cast<double>(r.events.size()));
   out->SetAttribute("arm_fault_latched", static_cast<double>(r.latched));
   out->AppendRow("/arm/report/peak_torque", r.peak_demanded.data(), n);

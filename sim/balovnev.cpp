@@ -1,5 +1,6 @@
 #include "sim/balovnev.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -105,6 +106,22 @@ BalovnevForce Balovnev(double depth, const BalovnevTool& tool, const BalovnevSoi
             (P(d, soil) + b * (d - tool.side_length * std::sin(beta)) * gamma * k);
   f.horizontal = f.blade + f.edge + f.sides;
   f.vertical = f.horizontal / std::tan(beta + soil.tool_friction_angle);
+  return f;
+}
+
+const char* BalovnevModelName(BalovnevModel model) {
+  return model == BalovnevModel::kLander ? "lander" : "textbook";
+}
+
+BalovnevForce BalovnevLander(double depth, const BalovnevTool& tool, const BalovnevSoil& soil,
+                             const BalovnevLanderConstants& lander) {
+  BalovnevSoil own = soil;
+  own.unit_weight = lander.bulk_density * lander.gravity;
+  own.surcharge = lander.gravity * lander.surcharge_mass;
+  BalovnevForce f = Balovnev(depth, tool, own, false, BalovnevBranch::kPlugin);
+  f.horizontal = std::min(f.horizontal, lander.max_horizontal);
+  f.vertical =
+      std::min(f.horizontal / std::tan(tool.rake + soil.tool_friction_angle), lander.max_vertical);
   return f;
 }
 

@@ -1,9 +1,14 @@
 // Balovnev's analytical excavation force on a bucket (FACTS.md section 7): the baseline the
 // reference study's DEM improves on (paper section 1, its ref. [9]: V. I. Balovnev, "New Methods
-// for Calculating Resistance to Cutting of Soil", 1983), as the OceanWATERS lander simulator's
-// Balovnev plugin evaluates it. Pure functions, SI units, angles in rad. Not ground truth: a
-// quasi-static wedge model with no velocity term, for comparison with the DEM
-// (`scoopsim study balovnev`, sim/commands.h).
+// for Calculating Resistance to Cutting of Soil", 1983), in two named variants (issue 40):
+//   textbook  Balovnev(): the formula below with the caller's soil (gamma from the DEM bed, q, b)
+//             and A split at x* (kSplit; kPlugin for the plugin's branch alone);
+//   lander    BalovnevLander(): the OceanWATERS lander simulator's Balovnev plugin, with its own
+//             constants (rho_bulk 1700 kg/m^3, g 1.315 m/s^2, q = g x 1 kg/m^2, b = 0), its
+//             branch rule (A_II at these angles) and its caps (F_h <= 40 N, then
+//             F_v = min(F_h cot(beta + delta), 30 N) from the capped F_h), FACTS.md section 7.
+// Pure functions, SI units, angles in rad. Not ground truth: a quasi-static wedge model with no
+// velocity term, for comparison with the DEM (`scoopsim study balovnev`, sim/commands.h).
 //
 // Symbols: d cutting depth; w blade width; beta rake angle from horizontal; phi internal friction
 // angle; delta soil-tool friction angle; c cohesion; gamma = rho_bulk g; q surcharge; l blade
@@ -62,6 +67,19 @@ struct BalovnevForce {
   double blade = 0, edge = 0, sides = 0;  // F_1, F_2, F_3 [N]
 };
 
+// The two variants, by name ("textbook", "lander").
+enum class BalovnevModel { kTextbook, kLander };
+const char* BalovnevModelName(BalovnevModel model);
+
+// The lander plugin's own constants (FACTS.md section 7, checked in its source).
+struct BalovnevLanderConstants {
+  double bulk_density = 1700;  // rho_bulk [kg/m^3]
+  double gravity = 1.315;      // g [m/s^2]
+  double surcharge_mass = 1;   // q = g x this [kg/m^2]
+  double max_horizontal = 40;  // F_h cap [N]
+  double max_vertical = 30;    // F_v cap [N]
+};
+
 // x* = (pi - delta - psi) / 2 [rad], where A_I and A_II meet.
 double BalovnevBranchAngle(const BalovnevSoil& soil);
 // A(x) for x in (0, pi/2], by `branch`.
@@ -72,5 +90,13 @@ double BalovnevA(double x, const BalovnevSoil& soil, BalovnevBranch branch);
 // >= 0), beta and alpha_e in (0, pi/2], phi in (0, pi/2), delta in [0, phi], c, q >= 0, gamma > 0.
 BalovnevForce Balovnev(double depth, const BalovnevTool& tool, const BalovnevSoil& soil,
                        bool buried, BalovnevBranch branch);
+// The lander plugin's variant at cutting depth `depth` (its plugin takes a moving maximum of the
+// trench depth; here the caller's depth): Balovnev() with the soil's phi, delta and c, but
+// gamma = rho_bulk g and q = g x surcharge_mass from `lander`, b = 0 and A_II (kPlugin); then
+// F_h = min(F_h, max_horizontal) and F_v = min(F_h cot(beta + delta), max_vertical) with the
+// capped F_h. blade, edge and sides are the terms before the caps. soil.unit_weight and
+// soil.surcharge are not used. Throws as Balovnev().
+BalovnevForce BalovnevLander(double depth, const BalovnevTool& tool, const BalovnevSoil& soil,
+                             const BalovnevLanderConstants& lander = {});
 
 }  // namespace sim

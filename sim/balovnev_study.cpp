@@ -55,7 +55,7 @@ dem::Vec3 BladeTip(const dem::TriangleMesh& mesh) {
 // One row of the comparison.
 struct Row {
   double time, rho, depth, dem_h, dem_down;
-  BalovnevForce split, plugin;
+  BalovnevForce split, plugin, lander;  // textbook (A split, A_II alone), the lander's variant
 };
 
 }  // namespace
@@ -162,10 +162,17 @@ int RunBalovnevStudy(const Scene& scene_in, const BalovnevStudyOptions& options)
          "columns of side "
       << 2 * r_max << " m around it), 0 above it\n"
       << "# dem_horizontal: -F_world . trench (against the motion); dem_down: -F_world.z; "
-         "balovnev_*: A split at x* (FACTS 7), plugin_*: A_II always; time since the dig "
-         "began [s]; forces [N]\n"
+         "balovnev_*: the textbook model with the bed's gamma, A split at x* (FACTS 7), "
+         "plugin_*: the same with A_II always; time since the dig began [s]; forces [N]\n"
+      << "# lander_*: the OceanWATERS lander plugin's variant: rho_bulk "
+      << BalovnevLanderConstants{}.bulk_density << " kg/m^3, g "
+      << BalovnevLanderConstants{}.gravity << " m/s^2, q = g x "
+      << BalovnevLanderConstants{}.surcharge_mass << " kg/m^2, b 0, A_II, "
+      << "F_h <= " << BalovnevLanderConstants{}.max_horizontal
+      << " N, F_v <= " << BalovnevLanderConstants{}.max_vertical << " N\n"
       << "time,pass,rho,tip_x,tip_y,tip_z,surface,depth,dem_horizontal,dem_down,"
-         "balovnev_horizontal,balovnev_vertical,plugin_horizontal,plugin_vertical\n";
+         "balovnev_horizontal,balovnev_vertical,plugin_horizontal,plugin_vertical,"
+         "lander_horizontal,lander_vertical\n";
   for (size_t k = 0; k < series.time.size(); ++k) {
     const dem::Vec3 t = dem::Apply(series.pose[k], tip);
     const double s = surface_map.Height(t.x, t.y);
@@ -176,11 +183,13 @@ int RunBalovnevStudy(const Scene& scene_in, const BalovnevStudyOptions& options)
             -dem::Dot(series.force_world[k], trench),
             -series.force_world[k].z,
             Balovnev(depth, options.tool, soil, options.buried, BalovnevBranch::kSplit),
-            Balovnev(depth, options.tool, soil, options.buried, BalovnevBranch::kPlugin)};
+            Balovnev(depth, options.tool, soil, options.buried, BalovnevBranch::kPlugin),
+            BalovnevLander(depth, options.tool, soil)};
     csv << row.time << "," << series.pass[k] << "," << row.rho << "," << t.x << "," << t.y << ","
         << t.z << "," << s << "," << depth << "," << row.dem_h << "," << row.dem_down << ","
         << row.split.horizontal << "," << row.split.vertical << "," << row.plugin.horizontal << ","
-        << row.plugin.vertical << "\n";
+        << row.plugin.vertical << "," << row.lander.horizontal << "," << row.lander.vertical
+        << "\n";
     rows.push_back(row);
   }
   csv.close();
@@ -203,11 +212,16 @@ int RunBalovnevStudy(const Scene& scene_in, const BalovnevStudyOptions& options)
       scene.path.c_str(), dig_cpu, dig_wall, rho_bulk, solid_fraction, density, g, soil.unit_weight,
       soil.surcharge, soil.cohesion, soil.friction_angle / kDeg, soil.tool_friction_angle / kDeg,
       options.tool.rake / kDeg, options.tool.width, options.buried ? 1 : 0, 2e3 * r_max);
+  // The columns of the models shown: textbook (A split, and the plugin's A_II beside it) and
+  // the lander plugin's variant.
+  const bool tb = options.show_textbook, ld = options.show_lander;
   std::printf(
-      "| t [s] | rho [mm] | depth [mm] | DEM F_h [N] | Balovnev F_h [N] | plugin F_h [N] "
-      "| DEM F_v down [N] | Balovnev F_v [N] | plugin F_v [N] |\n"
-      "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
-  auto print = [](const char* label, const std::vector<Row>& span) {
+      "| t [s] | rho [mm] | depth [mm] | DEM F_h [N] |%s%s DEM F_v down [N] |%s%s\n",
+      tb ? " textbook F_h [N] | textbook A_II F_h [N] |" : "", ld ? " lander F_h [N] |" : "",
+      tb ? " textbook F_v [N] | textbook A_II F_v [N] |" : "", ld ? " lander F_v [N] |" : "");
+  std::printf("| --- | --- | --- | --- |%s%s --- |%s%s\n", tb ? " --- | --- |" : "",
+              ld ? " --- |" : "", tb ? " --- | --- |" : "", ld ? " --- |" : "");
+  auto print = [tb, ld](const char* label, const std::vector<Row>& span) {
     Row m{};
     for (const Row& r : span) {
       m.time += r.time;
@@ -219,15 +233,21 @@ int RunBalovnevStudy(const Scene& scene_in, const BalovnevStudyOptions& options)
       m.split.vertical += r.split.vertical;
       m.plugin.horizontal += r.plugin.horizontal;
       m.plugin.vertical += r.plugin.vertical;
+      m.lander.horizontal += r.lander.horizontal;
+      m.lander.vertical += r.lander.vertical;
     }
     const double n = static_cast<double>(span.size());
     if (label != nullptr)
       std::printf("| %s ", label);
     else
       std::printf("| %.3f ", m.time / n);
-    std::printf("| %.1f | %.1f | %.3g | %.3g | %.3g | %.3g | %.3g | %.3g |\n", 1e3 * m.rho / n,
-                1e3 * m.depth / n, m.dem_h / n, m.split.horizontal / n, m.plugin.horizontal / n,
-                m.dem_down / n, m.split.vertical / n, m.plugin.vertical / n);
+    std::printf("| %.1f | %.1f | %.3g |", 1e3 * m.rho / n, 1e3 * m.depth / n, m.dem_h / n);
+    if (tb) std::printf(" %.3g | %.3g |", m.split.horizontal / n, m.plugin.horizontal / n);
+    if (ld) std::printf(" %.3g |", m.lander.horizontal / n);
+    std::printf(" %.3g |", m.dem_down / n);
+    if (tb) std::printf(" %.3g | %.3g |", m.split.vertical / n, m.plugin.vertical / n);
+    if (ld) std::printf(" %.3g |", m.lander.vertical / n);
+    std::printf("\n");
   };
   if (first <= last) {
     const double t0 = rows[first].time, t1 = rows[last].time;
@@ -254,7 +274,9 @@ int RunBalovnevStudy(const Scene& scene_in, const BalovnevStudyOptions& options)
   // The figure, by the project's plotting script.
   if (!options.plot) return kExitOk;
   const std::string png = BalovnevPngPath(options.output);
-  return RunPlotScript("plot_balovnev.py", {csv_path, "-o", png}) ? kExitOk : kExitFailure;
+  const std::string model = tb && ld ? "both" : (tb ? "textbook" : "lander");
+  return RunPlotScript("plot_balovnev.py", {csv_path, "-o", png, "--model", model}) ? kExitOk
+                                                                                    : kExitFailure;
 }
 
 }  // namespace sim

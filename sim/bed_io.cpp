@@ -110,6 +110,7 @@ void WriteClumps(hid_t file, const dem::System& system) {
   std::vector<double> q;
   for (const dem::Quat& o : c.q) q.insert(q.end(), {o.w, o.x, o.y, o.z});
   h5::WriteArray(group.get(), "orientation", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, q.data(), n, 4);
+  h5::MarkQuaternions(group.get(), "orientation", false);
   WriteClumpVectors(group.get(), "velocity", c.v);
   std::vector<dem::Vec3> w(n);
   for (size_t k = 0; k < n; ++k) w[k] = c.AngularVelocity(k);

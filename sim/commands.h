@@ -95,10 +95,13 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options);
 // tip's depth below that surface (0 above it); the DEM's horizontal force is -F_world . trench
 // (against the motion) and its vertical -F_world.z (downward, Balovnev's F_v's sense). Writes
 // OUT.balovnev.csv (one row per /scoop/ row: time since the dig began, pass, rho, tip_x, tip_y,
-// tip_z, surface, depth, dem_horizontal, dem_down, balovnev_horizontal, balovnev_vertical,
-// plugin_horizontal, plugin_vertical; '#' lines state the parameters), prints a table (ten spans of
-// the rows that cut, and their mean) on stdout, and with `plot` draws OUT.balovnev.png by
-// tools/plot_balovnev.py (/usr/bin/python3; exit 1 if that fails).
+// tip_z, surface, depth, dem_horizontal, dem_down, balovnev_horizontal, balovnev_vertical (the
+// textbook model: A split at x*), plugin_horizontal, plugin_vertical (the same with the plugin's
+// A_II), lander_horizontal, lander_vertical (the lander plugin's variant, BalovnevLander: its own
+// rho_bulk, g, q, b = 0 and caps); '#' lines state the parameters), prints a table (ten spans of
+// the rows that cut, and their mean) of the models `show_textbook` / `show_lander` choose on
+// stdout, and with `plot` draws them in OUT.balovnev.png by tools/plot_balovnev.py
+// (/usr/bin/python3; exit 1 if that fails).
 struct BalovnevStudyOptions {
   int threads = 0;  // 0 = all cores
   std::string output;
@@ -107,6 +110,7 @@ struct BalovnevStudyOptions {
   BalovnevTool tool;    // FACTS.md section 7's scoop
   BalovnevSoil soil;    // phi, delta, c, q; unit_weight is measured on the bed
   bool buried = false;  // b
+  bool show_textbook = true, show_lander = true;  // the models the table and plot show
 };
 int RunBalovnevStudy(const Scene& scene, const BalovnevStudyOptions& options);
 std::string BalovnevCsvPath(const std::string& output);  // OUT.h5 -> OUT.balovnev.csv

@@ -18,6 +18,7 @@
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -241,6 +242,18 @@ std::string ReadStringAttribute(hid_t object, const std::string& name) {
   return value.substr(0, value.find('\0'));
 }
 
+void WriteDatasetAttribute(hid_t location, const std::string& dataset, const std::string& attribute,
+                           const std::string& value) {
+  Handle object(CheckId(H5Oopen(location, dataset.c_str(), H5P_DEFAULT), "H5Oopen " + dataset),
+                H5Oclose);
+  WriteStringAttribute(object.get(), attribute, value);
+}
+
+void MarkQuaternions(hid_t location, const std::string& dataset, bool pose) {
+  WriteDatasetAttribute(location, dataset, "quaternion_order", kQuaternionOrder);
+  if (pose) WriteDatasetAttribute(location, dataset, "columns", kPoseColumns);
+}
+
 void WriteArray(hid_t location, const std::string& name, hid_t file_type, hid_t memory_type,
                 const void* data, hsize_t rows, hsize_t width) {
   const int rank = width == 1 ? 1 : 2;
@@ -444,9 +457,12 @@ constexpr hsize_t kSeriesChunkRows = 1024;  // rows per chunk of a time series
 struct Series {
   h5::Handle dataset;
   int width = 0;
-  hsize_t rows_on_disk = 0;     // written to the dataset
-  hsize_t rows_flushed = 0;     // of which flushed to the file
-  std::vector<double> pending;  // buffered rows, row-major (pending rows x width)
+  hsize_t rows_on_disk = 0;            // written to the dataset
+  hsize_t rows_flushed = 0;            // of which flushed to the file
+  bool bits = false;                   // uint64 (bit masks) instead of float64
+  std::vector<double> pending;         // buffered rows, row-major (pending rows x width)
+  std::vector<uint64_t> pending_bits;  // the same for a uint64 series
+  size_t PendingValues() const { return bits ? pending_bits.size() : pending.size(); }
 };
 
 }  // namespace
@@ -468,6 +484,8 @@ struct H5Output::Impl {
   const h5::CleanDriverState* driver = nullptr;  // what the file driver saw (CreateFile's)
   std::string failure;                           // why writing failed; then nothing more is written
   bool flush_due = false;                        // a series holds a chunk's worth of rows
+  // String attributes of series, by dataset path, written when the dataset is made.
+  std::map<std::string, std::vector<std::pair<std::string, std::string>>> series_attributes;
 
   // Runs a write; on the first failure, records the one-line reason (which file, how much is in
   // it, what it keeps) and throws it as OutputError. After a failure every write throws it again.
@@ -544,13 +562,14 @@ struct H5Output::Impl {
     if (!file.valid()) throw std::logic_error(std::string("H5Output::") + what + ": file closed");
   }
 
-  Series& GetSeries(const std::string& name, int width) {
+  Series& GetSeries(const std::string& name, int width, bool bits = false) {
     auto it = series.find(name);
     if (it != series.end()) {
-      if (it->second.width != width) {
+      if (it->second.width != width || it->second.bits != bits) {
         throw std::invalid_argument("H5Output::AppendRow: " + name + " has width " +
-                                    std::to_string(it->second.width) + ", got " +
-                                    std::to_string(width));
+                                    std::to_string(it->second.width) +
+                                    (it->second.bits ? " (uint64)" : " (float64)") + ", got " +
+                                    std::to_string(width) + (bits ? " (uint64)" : " (float64)"));
       }
       return it->second;
     }
@@ -573,19 +592,27 @@ struct H5Output::Impl {
     h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1),
                 "H5Pset_create_intermediate_group");
     Series s;
-    s.dataset = h5::Handle(h5::CheckId(H5Dcreate2(file.get(), name.c_str(), H5T_IEEE_F64LE,
-                                                  space.get(), lcpl.get(), dcpl.get(), H5P_DEFAULT),
-                                       "H5Dcreate2 " + name + " in " + path),
-                           H5Dclose);
+    s.dataset = h5::Handle(
+        h5::CheckId(H5Dcreate2(file.get(), name.c_str(), bits ? H5T_STD_U64LE : H5T_IEEE_F64LE,
+                               space.get(), lcpl.get(), dcpl.get(), H5P_DEFAULT),
+                    "H5Dcreate2 " + name + " in " + path),
+        H5Dclose);
     s.width = width;
-    s.pending.reserve(kSeriesChunkRows * w);
+    s.bits = bits;
+    if (bits) {
+      s.pending_bits.reserve(kSeriesChunkRows * w);
+    } else {
+      s.pending.reserve(kSeriesChunkRows * w);
+    }
+    for (const auto& [attribute, value] : series_attributes[name])
+      h5::WriteStringAttribute(s.dataset.get(), attribute, value);
     return series.emplace(name, std::move(s)).first->second;
   }
 
   // Appends the buffered rows of `s` to its dataset.
   void WriteRows(const std::string& name, Series& s) {
     const hsize_t w = static_cast<hsize_t>(s.width);
-    const hsize_t n = s.pending.size() / w;
+    const hsize_t n = s.PendingValues() / w;
     if (n == 0) return;
     const int rank = s.width == 1 ? 1 : 2;
     const hsize_t new_dims[2] = {s.rows_on_disk + n, w};
@@ -600,11 +627,14 @@ struct H5Output::Impl {
         "H5Sselect_hyperslab" + what);
     h5::Handle memory_space(h5::CheckId(H5Screate_simple(rank, count, nullptr), "H5Screate"),
                             H5Sclose);
-    h5::CheckOk(H5Dwrite(s.dataset.get(), H5T_NATIVE_DOUBLE, memory_space.get(), file_space.get(),
-                         H5P_DEFAULT, s.pending.data()),
+    h5::CheckOk(H5Dwrite(s.dataset.get(), s.bits ? H5T_NATIVE_UINT64 : H5T_NATIVE_DOUBLE,
+                         memory_space.get(), file_space.get(), H5P_DEFAULT,
+                         s.bits ? static_cast<const void*>(s.pending_bits.data())
+                                : static_cast<const void*>(s.pending.data())),
                 "H5Dwrite" + what);
     s.rows_on_disk += n;
     s.pending.clear();
+    s.pending_bits.clear();
   }
 
   // Takes from the file now at `path` the first cursor.rows of each series (buffered, written at
@@ -623,14 +653,45 @@ struct H5Output::Impl {
     };
     for (const auto& [name, rows] : cursor.rows) {
       const hsize_t width = width_of(name);
+      const h5::Handle d(h5::CheckId(H5Dopen2(old.get(), name.c_str(), H5P_DEFAULT), name),
+                         H5Dclose);
+      const h5::Handle type(h5::CheckId(H5Dget_type(d.get()), name), H5Tclose);
+      const bool bits = H5Tget_class(type.get()) == H5T_INTEGER;
+      // Its string attributes (quaternion_order, ...) go with it, written as it is made: in SWMR
+      // mode a dataset's header does not grow once rows are in it.
+      std::vector<std::string> attributes;
+      hsize_t at = 0;
+      H5Aiterate2(
+          d.get(), H5_INDEX_NAME, H5_ITER_INC, &at,
+          [](hid_t, const char* attribute, const H5A_info_t*, void* data) -> herr_t {
+            static_cast<std::vector<std::string>*>(data)->push_back(attribute);
+            return 0;
+          },
+          &attributes);
+      for (const std::string& attribute : attributes) {
+        const h5::Handle a(H5Aopen(d.get(), attribute.c_str(), H5P_DEFAULT), H5Aclose);
+        const h5::Handle a_type(H5Aget_type(a.get()), H5Tclose);
+        if (H5Tget_class(a_type.get()) != H5T_STRING) continue;
+        series_attributes[name].emplace_back(attribute,
+                                             h5::ReadStringAttribute(d.get(), attribute));
+      }
       int64_t n = 0;
-      const std::vector<double> values =
-          in.Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, width, &n);
-      if (n < rows)
-        in.Fail(name, "holds " + std::to_string(n) + " rows, its checkpoint " +
-                          std::to_string(rows) + "; cannot resume from this file");
-      Series& s = GetSeries(name, static_cast<int>(width));
-      s.pending.assign(values.begin(), values.begin() + rows * static_cast<int64_t>(width));
+      const auto check_rows = [&] {
+        if (n < rows)
+          in.Fail(name, "holds " + std::to_string(n) + " rows, its checkpoint " +
+                            std::to_string(rows) + "; cannot resume from this file");
+      };
+      Series& s = GetSeries(name, static_cast<int>(width), bits);
+      const int64_t keep = rows * static_cast<int64_t>(width);
+      if (bits) {
+        const auto values = in.Read<uint64_t>(name, H5T_INTEGER, H5T_NATIVE_UINT64, -1, width, &n);
+        check_rows();
+        s.pending_bits.assign(values.begin(), values.begin() + keep);
+      } else {
+        const auto values = in.Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, width, &n);
+        check_rows();
+        s.pending.assign(values.begin(), values.begin() + keep);
+      }
     }
     struct Field {
       const char* name;
@@ -709,6 +770,7 @@ struct H5Output::Impl {
       h5::WriteArray(g.get(), "part", H5T_STD_I32LE, H5T_NATIVE_INT32, part.data(), ht, 1);
       h5::WriteArray(g.get(), "pose", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, pose.data(),
                      static_cast<hsize_t>(parts), 7);
+      h5::MarkQuaternions(g.get(), "pose", true);
       entries.push_back({role, v, t});
     }
     return entries;
@@ -856,26 +918,143 @@ H5Output::~H5Output() {
   }
 }
 
-void H5Output::AppendRow(const std::string& dataset, const double* values, int width) {
+namespace {
+
+// The absolute path of `dataset` under the SetGroup prefix `group`.
+std::string SeriesName(const std::string& group, const std::string& dataset) {
+  return group + (!dataset.empty() && dataset[0] == '/' ? dataset : "/" + dataset);
+}
+
+}  // namespace
+
+template <typename T>
+void H5Output::Append(const std::string& dataset, const T* values, int width) {
   Impl& m = *impl_;
+  constexpr bool kBits = std::is_same_v<T, uint64_t>;
   m.RequireOpen("AppendRow");
   if (width < 1) throw std::invalid_argument("H5Output::AppendRow: width must be >= 1");
   if (!m.failure.empty()) throw OutputError(m.failure);
-  const std::string name =
-      m.group + (!dataset.empty() && dataset[0] == '/' ? dataset : "/" + dataset);
+  const std::string name = SeriesName(m.group, dataset);
   Series* s = nullptr;
   const auto it = m.series.find(name);
   if (it != m.series.end()) {
-    s = &m.GetSeries(name, width);  // checks the width (std::invalid_argument)
+    s = &m.GetSeries(name, width, kBits);  // checks the width and type (std::invalid_argument)
   } else {
-    m.Write([&] { s = &m.GetSeries(name, width); });  // creates the dataset
+    m.Write([&] { s = &m.GetSeries(name, width, kBits); });  // creates the dataset
   }
-  s->pending.insert(s->pending.end(), values, values + width);
+  if constexpr (kBits) {
+    s->pending_bits.insert(s->pending_bits.end(), values, values + width);
+  } else {
+    s->pending.insert(s->pending.end(), values, values + width);
+  }
   // Rows go to the file only in Flush(), so the file's row counts move with its flushes; a
   // series that reaches its next chunk boundary makes the next MaybeFlush() flush (whole chunks
   // in one piece, and never between two series of one step's rows).
   const hsize_t to_boundary = kSeriesChunkRows - s->rows_on_disk % kSeriesChunkRows;
-  if (s->pending.size() / static_cast<size_t>(width) >= to_boundary) m.flush_due = true;
+  if (s->PendingValues() / static_cast<size_t>(width) >= to_boundary) m.flush_due = true;
+}
+
+void H5Output::AppendRow(const std::string& dataset, const double* values, int width) {
+  Append(dataset, values, width);
+}
+
+void H5Output::AppendRow(const std::string& dataset, const uint64_t* values, int width) {
+  Append(dataset, values, width);
+}
+
+void H5Output::SetSeriesAttribute(const std::string& dataset, const std::string& name,
+                                  const std::string& value) {
+  Impl& m = *impl_;
+  m.RequireOpen("SetSeriesAttribute");
+  const std::string path = SeriesName(m.group, dataset);
+  auto& list = m.series_attributes[path];
+  for (const auto& [attribute, v] : list) {
+    if (attribute == name && v == value) return;
+  }
+  list.emplace_back(name, value);
+  const auto it = m.series.find(path);
+  if (it != m.series.end()) {
+    m.Write([&] { h5::WriteStringAttribute(it->second.dataset.get(), name, value); });
+  }
+}
+
+void H5Output::WriteTable(const std::string& dataset, const std::vector<TableColumn>& columns,
+                          int64_t rows) {
+  Impl& m = *impl_;
+  m.RequireOpen("WriteTable");
+  if (!m.failure.empty()) throw OutputError(m.failure);
+  const std::string name = SeriesName(m.group, dataset);
+  m.Write([&] {
+    // One packed record per row: float64, uint64, int32 or fixed-length (NUL-padded) text.
+    std::vector<size_t> offset, size;
+    size_t record = 0;
+    for (const TableColumn& c : columns) {
+      size_t bytes = 8;
+      if (c.kind == TableColumn::Kind::kInt32) bytes = 4;
+      if (c.kind == TableColumn::Kind::kText) {
+        bytes = 1;
+        for (const std::string& t : c.text) bytes = std::max(bytes, t.size() + 1);
+      }
+      offset.push_back(record);
+      size.push_back(bytes);
+      record += bytes;
+    }
+    h5::Handle type(h5::CheckId(H5Tcreate(H5T_COMPOUND, record), "H5Tcreate"), H5Tclose);
+    std::vector<h5::Handle> strings;
+    for (size_t k = 0; k < columns.size(); ++k) {
+      hid_t member = H5T_NATIVE_DOUBLE;
+      switch (columns[k].kind) {
+        case TableColumn::Kind::kFloat64:
+          member = H5T_NATIVE_DOUBLE;
+          break;
+        case TableColumn::Kind::kUint64:
+          member = H5T_NATIVE_UINT64;
+          break;
+        case TableColumn::Kind::kInt32:
+          member = H5T_NATIVE_INT32;
+          break;
+        case TableColumn::Kind::kText:
+          strings.emplace_back(h5::CheckId(H5Tcopy(H5T_C_S1), "H5Tcopy"), H5Tclose);
+          h5::CheckOk(H5Tset_size(strings.back().get(), size[k]), "H5Tset_size");
+          h5::CheckOk(H5Tset_strpad(strings.back().get(), H5T_STR_NULLTERM), "H5Tset_strpad");
+          member = strings.back().get();
+          break;
+      }
+      h5::CheckOk(H5Tinsert(type.get(), columns[k].name.c_str(), offset[k], member), "H5Tinsert");
+    }
+    std::vector<unsigned char> data(record * static_cast<size_t>(rows), 0);
+    for (int64_t r = 0; r < rows; ++r) {
+      unsigned char* at = data.data() + record * static_cast<size_t>(r);
+      for (size_t k = 0; k < columns.size(); ++k) {
+        const TableColumn& c = columns[k];
+        switch (c.kind) {
+          case TableColumn::Kind::kFloat64:
+            std::memcpy(at + offset[k], &c.float64.at(r), 8);
+            break;
+          case TableColumn::Kind::kUint64:
+            std::memcpy(at + offset[k], &c.uint64.at(r), 8);
+            break;
+          case TableColumn::Kind::kInt32:
+            std::memcpy(at + offset[k], &c.int32.at(r), 4);
+            break;
+          case TableColumn::Kind::kText:
+            std::memcpy(at + offset[k], c.text.at(r).data(), c.text.at(r).size());
+            break;
+        }
+      }
+    }
+    const hsize_t dims[1] = {static_cast<hsize_t>(rows)};
+    h5::Handle space(h5::CheckId(H5Screate_simple(1, dims, nullptr), "H5Screate_simple"), H5Sclose);
+    const h5::Handle lcpl = h5::IntermediateGroupsLcpl();
+    h5::Handle d(h5::CheckId(H5Dcreate2(m.file.get(), name.c_str(), type.get(), space.get(),
+                                        lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+                             "H5Dcreate2 " + name + " in " + m.path),
+                 H5Dclose);
+    if (rows > 0) {
+      h5::CheckOk(H5Dwrite(d.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()),
+                  "H5Dwrite " + name + " in " + m.path);
+    }
+  });
 }
 
 void H5Output::WriteSnapshot(double time, const dem::Particles& particles,

@@ -5,7 +5,8 @@
 //   /                       attributes scene_yaml, version (strings); state_hash (16 hex digits)
 //                           and state_hash_u64 once set; any SetAttribute() values
 //   /series/...             time series: extendable (n) for width 1, (n x width) otherwise;
-//                           chunks of 1024 rows, shuffle + deflate 4
+//                           float64, or uint64 for bit masks; chunks of 1024 rows, shuffle +
+//                           deflate 4
 //   /snapshots/NNNNNN       attribute time [s]; id int64 (N), position, velocity,
 //                           angular_velocity (N x 3), radius (N), material int32 (N), speed (N),
 //                           connectivity int64 (N) = 0..N-1; all in persistent-id order, SI units
@@ -45,6 +46,13 @@
 
 namespace sim {
 
+// The quaternion order of every dataset that holds quaternions (/scoop/pose, the snapshots' mesh
+// poses, a bed's /clumps/orientation), stated at it as the string attribute quaternion_order:
+// scalar first, w x y z (ROS's geometry_msgs/Quaternion puts w last). A pose of 7 columns also
+// names them (attribute columns).
+constexpr const char* kQuaternionOrder = "w x y z";
+constexpr const char* kPoseColumns = "x y z qw qx qy qz";
+
 // A write of the output failed; what() is the one line to print (file, size, rows kept).
 class OutputError : public std::runtime_error {
  public:
@@ -76,6 +84,27 @@ class H5Output {
   // created as needed). Rows are buffered and written a chunk at a time. The width of a dataset
   // is fixed by its first row (std::invalid_argument on a mismatch).
   void AppendRow(const std::string& dataset, const double* values, int width);
+  // The same for bit masks: the dataset is uint64 (a dataset keeps the type of its first row).
+  void AppendRow(const std::string& dataset, const uint64_t* values, int width);
+  // A string attribute of the series `dataset` (e.g. quaternion_order), written when it is made:
+  // call it before the dataset's first row (in SWMR mode an attribute added to a dataset that
+  // holds rows can find no room in its header). A resumed output takes them from the old file.
+  void SetSeriesAttribute(const std::string& dataset, const std::string& name,
+                          const std::string& value);
+
+  // Writes `dataset` once as a one-dimensional table of `rows` records (HDF5 compound; zero rows
+  // allowed), one field per column, in the columns' order.
+  struct TableColumn {
+    enum class Kind { kFloat64, kUint64, kInt32, kText };
+    std::string name;
+    Kind kind = Kind::kFloat64;
+    std::vector<double> float64;  // the rows of the one that `kind` names
+    std::vector<uint64_t> uint64;
+    std::vector<int32_t> int32;
+    std::vector<std::string> text;  // stored fixed-length, NUL-terminated
+  };
+  void WriteTable(const std::string& dataset, const std::vector<TableColumn>& columns,
+                  int64_t rows);
 
   // Writes /snapshots/NNNNNN (sequential from 000000) with `meshes` (the scoop, the arm's links,
   // the obstacles at that instant), flushes the file, then rewrites the XDMF sidecar, so the
@@ -124,6 +153,9 @@ class H5Output {
   bool swmr() const;
 
  private:
+  template <typename T>
+  void Append(const std::string& dataset, const T* values, int width);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -98,8 +98,12 @@ hsize_t Reader::CheckShape(const std::string& name, hid_t dataset, H5T_class_t t
     Fail(name, "expected shape " + expected + ", got " + got + ")");
   }
   const Handle type(CheckId(H5Dget_type(dataset), "H5Dget_type " + name), H5Tclose);
-  if (H5Tget_class(type.get()) != type_class) {
-    Fail(name, type_class == H5T_FLOAT ? "expected floating-point numbers" : "expected integers");
+  const H5T_class_t stored = H5Tget_class(type.get());
+  if (type_class == H5T_NO_CLASS ? (stored != H5T_FLOAT && stored != H5T_INTEGER)
+                                 : stored != type_class) {
+    Fail(name, type_class == H5T_FLOAT     ? "expected floating-point numbers"
+               : type_class == H5T_INTEGER ? "expected integers"
+                                           : "expected numbers");
   }
   return dims[0];
 }

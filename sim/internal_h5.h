@@ -124,6 +124,12 @@ std::string ReadStringAttribute(hid_t object, const std::string& name);
 constexpr hsize_t kSnapshotChunkRows = 16384;
 void WriteArray(hid_t location, const std::string& name, hid_t file_type, hid_t memory_type,
                 const void* data, hsize_t rows, hsize_t width);
+// Sets string attribute `attribute` of the dataset `dataset` under `location`.
+void WriteDatasetAttribute(hid_t location, const std::string& dataset, const std::string& attribute,
+                           const std::string& value);
+// quaternion_order (and columns, for a 7-column pose) on `dataset` under `location`
+// (sim::kQuaternionOrder, sim::kPoseColumns).
+void MarkQuaternions(hid_t location, const std::string& dataset, bool pose);
 // Writes an opaque serialised state (System::SaveState and the like) as a 1-D uint8 dataset.
 void WriteBytes(hid_t location, const std::string& name, const std::vector<char>& bytes);
 
@@ -208,8 +214,9 @@ class Reader {
   std::vector<std::string> List(const std::string& name) const;
 
   // Reads a numeric dataset of shape (rows) for width 1 or (rows x width) as `memory_type`, its
-  // stored type being of `type_class` (H5T_FLOAT, H5T_INTEGER). `rows` < 0 accepts any row
-  // count; the count read is returned in *rows_read.
+  // stored type being of `type_class` (H5T_FLOAT, H5T_INTEGER; H5T_NO_CLASS: either, converted
+  // by HDF5, e.g. bit masks stored uint64 now and float64 by older runs). `rows` < 0 accepts any
+  // row count; the count read is returned in *rows_read.
   template <typename T>
   std::vector<T> Read(const std::string& name, H5T_class_t type_class, hid_t memory_type,
                       int64_t rows, hsize_t width, int64_t* rows_read = nullptr) const {

@@ -116,8 +116,9 @@ ArmSeries SavedRun::Arm() const {
   a.torque_demanded =
       in.Read<double>("/arm/torque_demanded", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
   a.effort_limit = in.Read<double>("/arm/effort_limit", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
-  for (double bits : in.Read<double>("/arm/fault_latched", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, 1))
-    a.fault_latched.push_back(static_cast<uint64_t>(bits));
+  // uint64 since issue 40; float64 in older files (HDF5 converts either).
+  a.fault_latched =
+      in.Read<uint64_t>("/arm/fault_latched", H5T_NO_CLASS, H5T_NATIVE_UINT64, rows, 1);
   return a;
 }
 

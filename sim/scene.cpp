@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -227,6 +228,43 @@ class MapReader {
     return v;
   }
 
+  // An angle (`rate`: an angular rate) in degrees (deg/s), for `ok`'s check and the caller's
+  // conversion: a bare number as before, or with its unit, "90 deg", "1.5708 rad" ("5 deg/s",
+  // "0.1 rad/s"). A bare number that looks like radians is taken as degrees with a warning
+  // (yaml_input.h, LooksLikeRadians).
+  double Angle(const char* key, const std::string& expected, const std::function<bool(double)>& ok,
+               bool rate = false) const {
+    return CheckAngle(Need(key, expected), Key(key), expected, ok, rate);
+  }
+  double Angle(const char* key, double fallback, const std::string& expected,
+               const std::function<bool(double)>& ok, bool rate = false) const {
+    return Has(key) ? Angle(key, expected, ok, rate) : fallback;
+  }
+  double CheckAngle(const YAML::Node& value, const std::string& key, const std::string& expected,
+                    const std::function<bool(double)>& ok, bool rate,
+                    const YAML::Node* whole = nullptr) const {
+    double v = 0;
+    if (value.IsScalar() && !YAML::convert<double>::decode(value, v)) {
+      if (!yaml_input::ParseAngleWithUnit(value.Scalar(), rate, &v) || !ok(v)) {
+        Fail(file_, LineOf(value), key,
+             expected + (rate ? ", or with a unit (5 deg/s, 0.1 rad/s)"
+                              : ", or with a unit (90 deg, 1.5708 rad)"),
+             Describe(whole ? *whole : value));
+      }
+      return v;
+    }
+    v = CheckNumber(value, key, expected, ok, whole);
+    if (yaml_input::LooksLikeRadians(v)) {
+      const std::string unit = rate ? "deg/s" : "deg";
+      yaml_input::Warn(file_ + ":" + std::to_string(LineOf(value)) + ": " + key + ": " +
+                       value.Scalar() + " is taken as " + unit +
+                       "; if radians were meant, write '" + value.Scalar() + " " +
+                       (rate ? "rad/s" : "rad") + "' (or '" + value.Scalar() + " " + unit +
+                       "' to keep degrees)");
+    }
+    return v;
+  }
+
   // Checks a scalar number; errors quote `whole` (the enclosing list) when given.
   double CheckNumber(const YAML::Node& value, const std::string& key, const std::string& expected,
                      const std::function<bool(double)>& ok,
@@ -404,8 +442,13 @@ void ParseSegment(const std::string& file, const MapReader& parent, const char* 
   seg.start = m.Number("start", seg.start, "a number >= 0 (s)", NonNegative);
   if (!was && !m.Has(speed_key)) m.Need(speed_key, "a number > 0");
   if (!was && !m.Has(amount_key)) m.Need(amount_key, "a number > 0");
-  seg.speed = m.Number(speed_key, seg.speed / unit, "a number > 0", Positive) * unit;
-  seg.amount = m.Number(amount_key, seg.amount / unit, "a number > 0", Positive) * unit;
+  if (unit != 1.0) {  // rate and angle
+    seg.speed = m.Angle(speed_key, seg.speed / unit, "a number > 0", Positive, true) * unit;
+    seg.amount = m.Angle(amount_key, seg.amount / unit, "a number > 0", Positive) * unit;
+  } else {
+    seg.speed = m.Number(speed_key, seg.speed / unit, "a number > 0", Positive) * unit;
+    seg.amount = m.Number(amount_key, seg.amount / unit, "a number > 0", Positive) * unit;
+  }
   if (was) {
     *it = seg;
   } else {
@@ -489,8 +532,8 @@ void ParseMoves(const std::string& file, const YAML::Node& node, std::vector<Mov
       const std::string axis_expected =
           "a list of 3 numbers [ax, ay, az], not all 0 (axis, world, right hand)";
       const dem::Vec3 axis = m.Direction("rotate", axis_expected);
-      const double rate = m.Number("rate", "a number > 0 (deg/s)", Positive) * kDeg;
-      const double angle = m.Number("angle", "a number >= 0 (deg)", NonNegative) * kDeg;
+      const double rate = m.Angle("rate", "a number > 0 (deg/s)", Positive, true) * kDeg;
+      const double angle = m.Angle("angle", "a number >= 0 (deg)", NonNegative) * kDeg;
       const double start = m.Number("start", start_default, start_expected, NonNegative);
       if (m.Has("about")) {
         const dem::Vec3 point = m.Vector("about", "a list of 3 numbers [x, y, z] (m, l_scoop)");
@@ -616,12 +659,12 @@ void ParseDig(const std::string& file, const YAML::Node& node, int bed_material,
     t.pivot_start.y = tr.CheckNumber(
         st[1], "dig.trajectory.start", expected, [](double) { return true; }, &st);
   }
-  dig.heading = tr.Number("heading", 0.0, "a number (deg)", [](double) { return true; }) * kDeg;
+  dig.heading = tr.Angle("heading", 0.0, "a number (deg)", [](double) { return true; }) * kDeg;
   if (tr.Has("pivot"))
     t.pivot_offset = tr.Vector("pivot", "a list of 3 numbers [x, y, z] (m, l_scoop)");
   t.initial_pitch =
-      tr.Number("initial_pitch", t.initial_pitch / kDeg, "a number in [-180, 180] (deg)",
-                [](double v) { return v >= -180 && v <= 180; }) *
+      tr.Angle("initial_pitch", t.initial_pitch / kDeg, "a number in [-180, 180] (deg)",
+               [](double v) { return v >= -180 && v <= 180; }) *
       kDeg;
   std::vector<MoveSource> sources;  // one per move of t.moves
   if (tr.Has("moves")) {
@@ -755,7 +798,7 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
     if (b.Has("position")) {
       a.base_given = true;
       a.base_position = b.Vector("position", "a list of 3 numbers [x, y, z] (m, world)");
-      a.base_yaw = b.Number("yaw", 0.0, "a number (deg)", [](double) { return true; }) * kDeg;
+      a.base_yaw = b.Angle("yaw", 0.0, "a number (deg)", [](double) { return true; }) * kDeg;
     } else if (b.Has("yaw")) {
       Fail(file, LineOf(node["base"]["yaw"]), "arm.base.yaw", "yaw only with arm.base.position",
            Describe(node["base"]["yaw"]), "placed at the dig, the base turns with dig.heading");
@@ -781,8 +824,8 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
     if (!v.IsSequence() || static_cast<int>(v.size()) != n)
       Fail(file, LineOf(v), "arm.initial", expected, Describe(v));
     for (int i = 0; i < n; ++i)
-      a.initial[i] = m.CheckNumber(
-                         v[i], "arm.initial", expected, [](double) { return true; }, &v) *
+      a.initial[i] = m.CheckAngle(
+                         v[i], "arm.initial", expected, [](double) { return true; }, false, &v) *
                      kDeg;
   }
 
@@ -949,8 +992,8 @@ RenderSpec ParseRender(const std::string& path, const YAML::Node& node) {
       spec.camera_preset.clear();
       spec.camera_position = c.Vector("position", "a list of 3 numbers [x, y, z] (m)");
       spec.camera_target = c.Vector("target", "a list of 3 numbers [x, y, z] (m)");
-      spec.fov_deg = c.Number("fov", spec.fov_deg, "a number in (0, 180) (deg)",
-                              [](double v) { return v > 0 && v < 180; });
+      spec.fov_deg = c.Angle("fov", spec.fov_deg, "a number in (0, 180) (deg)",
+                             [](double v) { return v > 0 && v < 180; });
       if (dem::Norm(spec.camera_target - spec.camera_position) <= 0) {
         Fail(path, LineOf(camera["target"]), "render.camera.target",
              "a point other than render.camera.position", Describe(camera["target"]));
@@ -1117,6 +1160,7 @@ Scene LoadScene(const std::string& path) {
 }
 
 Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
+  yaml_input::TakeWarnings();  // none left from a load that failed
   Scene scene;
   scene.path = path;
   scene.yaml_text = yaml_text;
@@ -1373,6 +1417,10 @@ Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
            std::to_string(scene.arm.substeps), why);
     }
   }
+  // Warnings (a bare angle that looks like radians): kept with the scene, one line each on stderr.
+  scene.warnings = yaml_input::TakeWarnings();
+  for (const std::string& w : scene.warnings)
+    std::fprintf(stderr, "scoopsim: warning: %s\n", w.c_str());
   return scene;
 }
 

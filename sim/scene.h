@@ -215,6 +215,9 @@ struct Scene {
   RenderSpec render;
   std::vector<ObstacleSpec> obstacles;  // key obstacles
   ArmSpec arm;                          // key arm
+  // Warnings of the load, one line each ("FILE:LINE: KEY: ..."; LoadScene also prints them):
+  // a bare angle that looks like radians (angles: degrees, or "90 deg", "1.5708 rad").
+  std::vector<std::string> warnings;
 };
 
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.

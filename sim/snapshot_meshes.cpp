@@ -56,6 +56,7 @@ std::vector<MeshEntry> WriteSnapshotMeshes(hid_t file, const std::string& group,
     WriteArray(g.get(), "part", H5T_STD_I32LE, H5T_NATIVE_INT32, part.data(), t, 1);
     WriteArray(g.get(), "pose", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, pose.data(),
                static_cast<hsize_t>(parts), 7);
+    MarkQuaternions(g.get(), "pose", true);
     entries.push_back(std::move(entry));
   }
   return entries;

@@ -647,11 +647,27 @@ void MergeParts(const SweepCase& c, const CasePaths& paths, double bed_cpu_s) {
         const int rank = H5Sget_simple_extent_dims(space.get(), dims, nullptr);
         if (rank < 1 || rank > 2) r.Fail(name, "expected a series of rank 1 or 2");
         const hsize_t width = rank == 2 ? dims[1] : 1;
+        const h5::Handle type(H5Dget_type(d.get()), H5Tclose);
+        if (H5Tget_class(type.get()) == H5T_INTEGER) {  // bit masks (uint64)
+          std::vector<uint64_t> values(dims[0] * width);
+          if (!values.empty()) {
+            h5::CheckOk(
+                H5Dread(d.get(), H5T_NATIVE_UINT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()),
+                "H5Dread " + name + " in " + part);
+          }
+          for (hsize_t row = 0; row < dims[0]; ++row)
+            out.AppendRow(name, values.data() + row * width, static_cast<int>(width));
+          continue;
+        }
         std::vector<double> values(dims[0] * width);
         if (!values.empty()) {
           h5::CheckOk(
               H5Dread(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()),
               "H5Dread " + name + " in " + part);
+        }
+        if (name == "/scoop/pose") {
+          out.SetSeriesAttribute(name, "quaternion_order", kQuaternionOrder);
+          out.SetSeriesAttribute(name, "columns", kPoseColumns);
         }
         for (hsize_t row = 0; row < dims[0]; ++row)
           out.AppendRow(name, values.data() + row * width, static_cast<int>(width));

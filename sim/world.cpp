@@ -405,6 +405,8 @@ void World::RecordDigRow() {
   Row3(out_, "/scoop/torque_scoop", w.torque_scoop);
   Row3(out_, "/scoop/force_world", w.force_world);
   Row3(out_, "/scoop/torque_world", w.torque_world);
+  out_->SetSeriesAttribute("/scoop/pose", "quaternion_order", kQuaternionOrder);
+  out_->SetSeriesAttribute("/scoop/pose", "columns", kPoseColumns);
   out_->AppendRow("/scoop/pose", pose7, 7);
   out_->AppendRow("/scoop/contacts", &contacts, 1);
   out_->AppendRow("/series/time", &t, 1);

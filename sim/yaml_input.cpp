@@ -1,5 +1,7 @@
 #include "sim/yaml_input.h"
 
+#include <cmath>
+#include <cstdlib>
 #include <map>
 #include <vector>
 
@@ -52,6 +54,42 @@ void RefuseDuplicateKeys(const std::string& file, const YAML::Node& map, const s
                        "first at line " + std::to_string(first->second));
     }
   }
+}
+
+bool ParseAngleWithUnit(const std::string& text, bool rate, double* degrees) {
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  const double v = std::strtod(begin, &end);
+  if (end == begin || !std::isfinite(v)) return false;
+  std::string unit(end);
+  unit.erase(0, unit.find_first_not_of(" \t"));
+  unit.erase(unit.find_last_not_of(" \t") + 1);
+  if (unit.size() == std::string(end).size()) return false;  // no space before the unit
+  const double kDegPerRad = 180.0 / 3.14159265358979323846;
+  if (unit == (rate ? "deg/s" : "deg")) {
+    *degrees = v;
+  } else if (unit == (rate ? "rad/s" : "rad")) {
+    *degrees = v * kDegPerRad;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+bool LooksLikeRadians(double v) {
+  return v != std::floor(v) && std::abs(v) <= 2 * 3.14159265358979323846;
+}
+
+namespace {
+thread_local std::vector<std::string> warnings;
+}  // namespace
+
+void Warn(const std::string& line) { warnings.push_back(line); }
+
+std::vector<std::string> TakeWarnings() {
+  std::vector<std::string> out;
+  out.swap(warnings);
+  return out;
 }
 
 }  // namespace sim::yaml_input

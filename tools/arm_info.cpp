@@ -35,6 +35,14 @@ void PrintArmInfo(const std::string& urdf, double g, std::FILE* out) {
     for (const std::string& h : model.held_joints) std::fprintf(out, " %s", h.c_str());
     std::fprintf(out, "\n");
   }
+  // Every link merged into another's body, one line each (the merge rule: arm/arm_model.h).
+  for (const arm::MergedLink& m : model.merges) {
+    char mass[64] = "no <inertial>";
+    if (m.has_inertial) std::snprintf(mass, sizeof mass, "%.6g kg", m.mass);
+    std::fprintf(out, "merged: %s (%s, %s joint %s) into %s: %s\n", m.link.c_str(), mass,
+                 m.joint_type.c_str(), m.joint.c_str(), m.body_link.c_str(),
+                 m.frame ? "a frame (mass and inertia dropped)" : "mass and inertia added");
+  }
   const double base = model.bodies[0].inertial.mass;
   std::fprintf(out, "mass: moving %.4f kg, base %.4f kg, total %.4f kg\n", model.MovingMass(), base,
                model.MovingMass() + base);
@@ -44,10 +52,12 @@ void PrintArmInfo(const std::string& urdf, double g, std::FILE* out) {
   for (const arm::NamedPose& p : arm::kLanderPoses) {
     if (n == 6 || std::string(p.name) == "zero") poses.push_back(p);
   }
-  std::fprintf(out, "gravity torques [N m] at g = %g m/s^2 (-z of %s); '!' marks |tau| > effort\n",
+  std::fprintf(out,
+               "gravity torques [N m, 6 significant digits] at g = %g m/s^2 (-z of %s); '!' marks "
+               "|tau| > effort\n",
                g, model.bodies[0].link.c_str());
   std::fprintf(out, "%-10s", "pose");
-  for (int i = 0; i < n; ++i) std::fprintf(out, " %10s", model.joints[i].name.c_str());
+  for (int i = 0; i < n; ++i) std::fprintf(out, " %13s", model.joints[i].name.c_str());
   std::fprintf(out, "\n");
   for (const arm::NamedPose& p : poses) {
     Eigen::VectorXd q = Eigen::VectorXd::Zero(n);
@@ -56,7 +66,7 @@ void PrintArmInfo(const std::string& urdf, double g, std::FILE* out) {
     std::fprintf(out, "%-10s", p.name);
     for (int i = 0; i < n; ++i) {
       const bool over = std::abs(tau[i]) > model.joints[i].effort;
-      std::fprintf(out, " %9.3f%c", tau[i], over ? '!' : ' ');
+      std::fprintf(out, " %12.6g%c", tau[i], over ? '!' : ' ');
     }
     std::fprintf(out, "\n");
   }

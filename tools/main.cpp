@@ -7,6 +7,7 @@
 //   scoopsim bench render --particles N --frames F [--threads T]
 //   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
 //   scoopsim study balovnev SCENE [-o OUT.h5] [--phi-deg P] [--delta-deg D] [--buried]
+//                                 [--model textbook|lander|both]
 //                                            the dig against Balovnev's model (table + PNG)
 //   scoopsim study particle-size SCENE [-o DIR] [--sizes A,B] [--beds N] [--prior CSV] [--case I]
 //   [--list]
@@ -330,6 +331,14 @@ int Main(int argc, char** argv) {
       ->capture_default_str();
   balovnev->add_flag("--buried", balovnev_buried, "b = 1: the bucket is buried (default b = 0)");
   balovnev->add_flag("--no-plot", balovnev_no_plot, "Do not draw OUT.balovnev.png");
+  std::string balovnev_model = "both";
+  balovnev
+      ->add_option("--model", balovnev_model,
+                   "Which Balovnev the table and plot show: textbook (FACTS 7's formula, the "
+                   "bed's gamma), lander (the OceanWATERS plugin's variant: its constants, "
+                   "branch and caps) or both; the CSV always has both")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"textbook", "lander", "both"}));
 
   // The particle-size study: its cases are a sweep (resumed, MPI, --case), so its options are a
   // sweep's rather than a run's.
@@ -568,6 +577,8 @@ int Main(int argc, char** argv) {
       options.soil.tool_friction_angle = balovnev_delta * kDeg;
       options.tool.rake = balovnev_rake * kDeg;
       options.buried = balovnev_buried;
+      options.show_textbook = balovnev_model != "lander";
+      options.show_lander = balovnev_model != "textbook";
       return sim::RunBalovnevStudy(scene, options);
     }
     if (*size) {

@@ -6,8 +6,9 @@
 
 Reads the arm series of scoopsim runs of a scene with an `arm:` block (sim/arm_driver.h; SI):
   /arm/time (n) [s], /arm/torque_demanded, /arm/torque_applied, /arm/effort_limit (n x joints)
-  [N m], /arm/fault_latched (n); /arm/fault_events (e x 5: time, flag, joint, value, limit)
-  when a fault was raised; root attributes arm_joints (names, comma-separated) and start_time
+  [N m], /arm/fault_latched (n, uint64); /arm/fault_events (e records: time, flag, flag_name,
+  joint, joint_name, value, limit; older files: e x 5 float64 time, flag, joint, value, limit,
+  present only when a fault was raised); root attributes arm_joints (names, comma-separated) and start_time
   (the dig's start; else the first /arm/time row).
 One panel per run: the demanded torque (the PID's output) and the applied one (clamped at the
 limit) of one joint against the time since the dig began, its effort limit as dashed lines at
@@ -36,6 +37,18 @@ class InputError(Exception):
     """Bad input: the message is the one line to print."""
 
 
+def read_events(f):
+    """/arm/fault_events as rows (time, flag, joint index, value, limit): the table of records
+    written since issue 40, or the e x 5 float64 array of older files (or none)."""
+    if "arm/fault_events" not in f:
+        return []
+    data = f["arm/fault_events"][()]
+    if data.dtype.names:
+        return [(float(r["time"]), int(r["flag"]), int(r["joint"]), float(r["value"]),
+                 float(r["limit"])) for r in data]
+    return [(float(t), int(flag), int(k), float(v), float(lim)) for t, flag, k, v, lim in data]
+
+
 def read_run(path, joint):
     """The series of one joint of a run file, times from the dig's start."""
     if not os.path.isfile(path):
@@ -56,7 +69,7 @@ def read_run(path, joint):
             raise InputError("%s: /arm/torque_demanded has shape %s, expected (%d, %d) (one "
                              "column per joint of arm_joints)"
                              % (path, demanded.shape, len(time), len(joints)))
-        events = f["arm/fault_events"][()] if "arm/fault_events" in f else np.zeros((0, 5))
+        events = read_events(f)
         start = float(f.attrs["start_time"]) if "start_time" in f.attrs else float(time[0])
     if joint is not None:
         if joint not in joints:

@@ -66,13 +66,18 @@ void SweepCommands::AddTo(CLI::App* app) {
       "query", "The wrench [Fx Fy Fz Tx Ty Tz] at one point (linear in bite depth and rho)");
   query_->add_option("TABLE", query_table_, "Table file (HDF5)")->required();
   query_->add_option("--material", query_material_, "Material name, e.g. snow")->required();
-  query_->add_option("--bite-depth-mm", query_bite_depth_mm_, "Bite depth [mm]")->required();
+  // Depth and rho in metres (as scenes and the CSV have them) or millimetres: one of each.
+  query_depth_m_opt_ =
+      query_->add_option("--bite-depth", query_bite_depth_, "Bite depth [m] (or --bite-depth-mm)");
+  query_depth_mm_opt_ =
+      query_->add_option("--bite-depth-mm", query_bite_depth_mm_, "Bite depth [mm]");
   query_->add_option("--pass", query_pass_, "Pass (1-based)")->required();
-  query_
-      ->add_option("--rho-mm", query_rho_mm_,
-                   "Distance since first contact [mm], as the table measures it (its "
-                   "rho_definition: path or along)")
-      ->required();
+  query_rho_m_opt_ = query_->add_option(
+      "--rho", query_rho_,
+      "Distance since first contact [m], as the table measures it (its rho_definition: path or "
+      "along) (or --rho-mm)");
+  query_rho_mm_opt_ =
+      query_->add_option("--rho-mm", query_rho_mm_, "Distance since first contact [mm]");
   query_->add_flag("--clamp", query_clamp_,
                    "Clamp bite depth and rho into the table's range instead of failing");
   query_->add_option("--frame", query_frame_, "scoop (l_scoop, the lander's) or body (the study's)")
@@ -126,6 +131,20 @@ int SweepCommands::Run() {
     return 0;
   }
   if (*query_) {
+    // One of --bite-depth [m] / --bite-depth-mm and one of --rho [m] / --rho-mm.
+    const auto in_mm = [](CLI::Option* metres, CLI::Option* mm, double m_value, double* mm_value) {
+      if (metres->count() > 0 && mm->count() > 0) {
+        throw sim::InputError(metres->get_name() + " and " + mm->get_name() +
+                              ": expected one of them (metres or millimetres), got both");
+      }
+      if (metres->count() == 0 && mm->count() == 0) {
+        throw sim::InputError(metres->get_name() + ": expected " + metres->get_name() + " [m] or " +
+                              mm->get_name() + " [mm], got neither");
+      }
+      if (metres->count() > 0) *mm_value = 1e3 * m_value;
+    };
+    in_mm(query_depth_m_opt_, query_depth_mm_opt_, query_bite_depth_, &query_bite_depth_mm_);
+    in_mm(query_rho_m_opt_, query_rho_mm_opt_, query_rho_, &query_rho_mm_);
     const sim::WrenchTable table(query_table_);
     const auto frame =
         query_frame_ == "body" ? sim::WrenchTable::Frame::kBody : sim::WrenchTable::Frame::kScoop;

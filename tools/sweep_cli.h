@@ -36,7 +36,10 @@ class SweepCommands {
 
   CLI::App* query_ = nullptr;
   std::string query_table_, query_material_, query_frame_ = "scoop";
-  double query_bite_depth_mm_ = 0, query_rho_mm_ = 0;
+  double query_bite_depth_mm_ = 0, query_rho_mm_ = 0;  // --bite-depth-mm, --rho-mm [mm]
+  double query_bite_depth_ = 0, query_rho_ = 0;        // --bite-depth, --rho [m]
+  CLI::Option *query_depth_mm_opt_ = nullptr, *query_depth_m_opt_ = nullptr;
+  CLI::Option *query_rho_mm_opt_ = nullptr, *query_rho_m_opt_ = nullptr;
   int query_pass_ = 0;
   bool query_clamp_ = false;
 

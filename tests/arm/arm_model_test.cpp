@@ -4,10 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "arm/internal_urdf_text.h"
 #include "tests/cli_util.h"
@@ -116,6 +118,84 @@ TEST(ArmModelTest, ReadsTheLanderArm) {
     }
   }
   EXPECT_TRUE(mesh);
+}
+
+// The lander's own arm (tests/arm/data/lander_own_arm.urdf): loaded as is. The grinder (0.5 kg,
+// on the revolute j_grinder held at zero) is merged into l_hand with its mass; the lander's dummy
+// l_scoop_tip (0.001 kg, inertia 1 1 1 kg m^2), the zero-mass l_grinder_tip and l_hand_tool (no
+// <inertial>) are frames: they keep their place and add nothing, so l_scoop's inertial is the
+// scoop's own exactly (with the tip's 1 kg m^2 it would be ~1000x larger). Every merge is listed.
+TEST(ArmModelTest, LanderOwnArmMergesItsFramesAndGrinder) {
+  const ArmModel m = LoadArmModel(ARM_OWN_URDF);
+  ASSERT_EQ(m.dof(), 6);
+  EXPECT_EQ(m.held_joints, std::vector<std::string>{"j_grinder"});
+  EXPECT_EQ(m.bodies[6].inertial.mass, 0.30936);
+  EXPECT_NEAR(m.bodies[6].inertial.inertia(0, 0), 0.001031, 1e-15);
+  EXPECT_NEAR(m.bodies[5].inertial.mass, 6.56759 + 0.5, 1e-12);
+  struct Expected {
+    const char* link;
+    const char* body_link;
+    const char* joint;
+    const char* type;
+    bool frame;
+    double mass;
+  };
+  const Expected expected[] = {
+      {"l_grinder", "l_hand", "j_grinder", "held", false, 0.5},
+      {"l_grinder_tip", "l_hand", "j_grinder_tip", "fixed", true, 0},
+      {"l_hand_tool", "l_hand", "j_hand_tool", "fixed", true, 0},
+      {"l_scoop_tip", "l_scoop", "l_scoop_tip_joint", "fixed", true, 0.001}};
+  ASSERT_EQ(m.merges.size(), 4u);
+  for (size_t k = 0; k < 4; ++k) {
+    const MergedLink& got = m.merges[k];
+    EXPECT_EQ(got.link, expected[k].link);
+    EXPECT_EQ(got.body_link, expected[k].body_link) << got.link;
+    EXPECT_EQ(got.joint, expected[k].joint) << got.link;
+    EXPECT_EQ(got.joint_type, expected[k].type) << got.link;
+    EXPECT_EQ(got.frame, expected[k].frame) << got.link;
+    EXPECT_EQ(got.mass, expected[k].mass) << got.link;
+  }
+  // The grinder's tip in l_hand: j_grinder's origin (Rz(-120 deg)) then (0.16, 0, 0).
+  int body = -1;
+  Eigen::Isometry3d tip;
+  ASSERT_TRUE(m.FindLink("l_grinder_tip", &body, &tip));
+  EXPECT_EQ(body, 5);
+  const double yaw = -2.0943951;
+  const Eigen::Vector3d want(-0.075 + 0.16 * std::cos(yaw), -0.129903811 + 0.16 * std::sin(yaw), 0);
+  EXPECT_LT((tip.translation() - want).norm(), 1e-12);
+}
+
+// A link that a chain joint moves cannot be a frame: a zero mass is refused as before, a
+// near-zero one (1e-12 kg, at most kFrameMass) names the link and the rule.
+TEST(ArmModelTest, MasslessLinkOnAMovingJointIsRefused) {
+  ExpectLoadError("zero_mass.urdf", Edited("<mass value=\"0.30936\"/>", "<mass value=\"0\"/>"),
+                  "<link name=\"l_scoop\">",
+                  "link 'l_scoop' <mass>: expected a mass > 0 kg, got 0");
+  ExpectLoadError("tiny_mass.urdf", Edited("<mass value=\"0.30936\"/>", "<mass value=\"1e-12\"/>"),
+                  "<link name=\"l_scoop\">",
+                  "link 'l_scoop' <mass>: expected a mass > 0.001 kg on a link a chain joint "
+                  "moves (a lighter link is a frame, allowed on fixed joints only), got 1e-12");
+}
+
+// The fixed l_scoop_tip of the shipped URDF, given the lander's 1e-12 kg: a frame, as without an
+// <inertial>; the same at 1 g (kFrameMass); at 2 g it is merged with its mass.
+TEST(ArmModelTest, FrameMassBoundOnAFixedJoint) {
+  const std::string no_inertial = "<link name=\"l_scoop_tip\"/>";
+  const auto with_mass = [&](const char* mass) {
+    return Edited(no_inertial, std::string("<link name=\"l_scoop_tip\"><inertial><mass value=\"") +
+                                   mass +
+                                   "\"/><inertia ixx=\"1e-9\" ixy=\"0\" ixz=\"0\" "
+                                   "iyy=\"1e-9\" iyz=\"0\" izz=\"1e-9\"/></inertial></link>");
+  };
+  for (const char* mass : {"1e-12", "0.001"}) {
+    const ArmModel m = ParseArmModel(with_mass(mass), "tip.urdf");
+    EXPECT_EQ(m.bodies[6].inertial.mass, 0.30936) << mass;
+    ASSERT_EQ(m.merges.size(), 2u);
+    EXPECT_TRUE(m.merges[1].frame) << mass;
+  }
+  const ArmModel heavy = ParseArmModel(with_mass("0.002"), "tip.urdf");
+  EXPECT_NEAR(heavy.bodies[6].inertial.mass, 0.30936 + 0.002, 1e-15);
+  EXPECT_FALSE(heavy.merges[1].frame);
 }
 
 TEST(ArmModelTest, MissingFileNamesThePath) {

@@ -186,6 +186,35 @@ TEST(FaultMonitorTest, ReactionsCarryTheirData) {
   EXPECT_STREQ(ReactionName(Reaction::kStopAndHold), "stop_and_hold");
 }
 
+// A fault that lasts one step between two rows (issue 40): samples every 1 ms, a row every 10
+// samples (k = 9, 19, ...). With no hold time the demand on j_dist_pitch (effort 25.7 N m) is at
+// 30 N m at sample 14 alone, so JOINT_TORQUE_LIMIT is active at that sample only. The condition at
+// each row's instant (what the rows held before) is 0 at every row; the OR over the interval
+// (RowFaultBits) puts bit 32 in the row of samples 10-19 and in no other.
+TEST(FaultMonitorTest, OneStepFaultShowsInItsRow) {
+  FaultRules rules;
+  rules.torque_hold_time = 0;
+  rules.on_torque_limit = Reaction::kContinue;
+  FaultMonitor monitor(Lander(), rules);
+  RowFaultBits row;
+  std::vector<uint64_t> rows, at_row_instant;
+  for (int k = 0; k < 40; ++k) {
+    ArmSample s = Quiet(k * 1e-3);
+    if (k == 14) s.joints[3].demanded = 30;
+    const FaultStep step = monitor.Update(s);
+    EXPECT_EQ(step.active, k == 14 ? uint64_t{kFaultJointTorqueLimit} : uint64_t{0})
+        << "sample " << k;
+    row.Add(step.active);
+    if (k % 10 == 9) {
+      rows.push_back(row.Take());
+      at_row_instant.push_back(step.active);
+    }
+  }
+  EXPECT_EQ(rows, (std::vector<uint64_t>{0, uint64_t{kFaultJointTorqueLimit}, 0, 0}));
+  EXPECT_EQ(at_row_instant, (std::vector<uint64_t>{0, 0, 0, 0}));  // the old rows: no fault
+  EXPECT_EQ(monitor.latched(), kFaultJointTorqueLimit);
+}
+
 TEST(FaultMonitorTest, UnknownSensorJointIsRejected) {
   FaultRules rules;
   rules.ft_joint = "j_elbow";

@@ -151,3 +151,73 @@ TEST(KinematicsTest, GrinderRaisesPitchTorquesThreeToEightPercent) {
 
 }  // namespace
 }  // namespace arm
+
+namespace arm {
+namespace {
+
+// The lander's own arm as its file has it (tests/arm/data/lander_own_arm.urdf: the grinder on a
+// revolute j_grinder held at zero, the 1 g dummy l_scoop_tip, the massless tool frames): gravity
+// torques at the named poses against a computation that shares nothing with arm_model.cpp's
+// merge. Forward kinematics from FACTS section 2's numbers typed in here (T_i = T_{i-1} *
+// Origin(xyz, rpy) * Rot(axis, q_i), rpy as Rz(Y) Ry(P) Rx(R)), each link with its own mass at
+// its own CoM, the grinder (0.5 kg, CoM (0, 0, 0.06) in its frame) hung on l_hand, the frames
+// without mass; then tau_i = -a_i . sum_{k beyond i} (c_k - o_i) x m_k g. Agreement to 1e-9 N m:
+// keeping l_scoop_tip's 1 g would move the torques by up to ~2.6e-3 N m (1 g x 1.3 m/s^2 x 2 m).
+// The same torques as the shipped URDF's (grinder fixed, massless tip) to 1e-12 relative.
+TEST(KinematicsTest, LanderOwnArmGravityTorquesEqualAnIndependentMomentSum) {
+  const ArmModel own = LoadArmModel(ARM_OWN_URDF);
+  ASSERT_EQ(own.dof(), 6);
+  struct Link {
+    Eigen::Vector3d xyz, rpy, axis, com;
+    double mass;
+  };
+  const Link chain[6] = {
+      {{0.79, 0.175, 0.27}, {-3.1416, 0, 0}, {0, 0, -1}, {0.05913, 0.00156, -0.02112}, 7.0292},
+      {{0.16, 0, 0}, {1.5708, 0, 0}, {0, 0, -1}, {0.16225, 0, -0.10446}, 3.98552},
+      {{0.53, 0, 0}, {0, 0, 0}, {0, 0, -1}, {0.22108, 0, -0.03080}, 7.67831},
+      {{0.586, 0, -0.15}, {3.1416, 0, 1.5708}, {0, 0, 1}, {0.08155, 0.00258, -0.02869}, 4.20589},
+      {{0.163, 0.2, 0}, {1.5708, 0, 0}, {0, 0, -1}, {-0.00482, 0, 0.07616}, 6.56759},
+      {{0.15, 0, 0}, {1.5708, 0, 1.5708}, {0, 0, -1}, {0.001315, 0, 0.045328}, 0.30936}};
+  const auto origin = [](const Eigen::Vector3d& xyz, const Eigen::Vector3d& rpy) {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.translation() = xyz;
+    t.linear() = (Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()) *
+                  Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()) *
+                  Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()))
+                     .toRotationMatrix();
+    return t;
+  };
+  const Eigen::Vector3d g(0, 0, -1.3);
+  const ArmModel shipped = LoadArmModel(ARM_TEST_URDF);
+  for (const NamedPose& p : kLanderPoses) {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    Eigen::Vector3d o[6], a[6], c[7];
+    double m[7];
+    for (int i = 0; i < 6; ++i) {
+      t = t * origin(chain[i].xyz, chain[i].rpy) *
+          Eigen::AngleAxisd(p.q[i], chain[i].axis.normalized());
+      o[i] = t.translation();
+      a[i] = t.linear() * chain[i].axis;
+      c[i] = t * chain[i].com;
+      m[i] = chain[i].mass;
+      if (i == 4) {  // the grinder on l_hand
+        c[6] =
+            t * origin({-0.075, -0.129903811, 0}, {0, 0, -2.0943951}) * Eigen::Vector3d(0, 0, 0.06);
+        m[6] = 0.5;
+      }
+    }
+    const Eigen::VectorXd q = Eigen::Map<const Eigen::VectorXd>(p.q.data(), 6);
+    const Eigen::VectorXd tau = GravityTorques(own, q, g);
+    const Eigen::VectorXd tau_shipped = GravityTorques(shipped, q, g);
+    for (int i = 0; i < 6; ++i) {
+      Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+      for (int k = i; k < 6; ++k) moment += (c[k] - o[i]).cross(m[k] * g);
+      if (i <= 4) moment += (c[6] - o[i]).cross(m[6] * g);  // the grinder is beyond joints 1-5
+      EXPECT_NEAR(tau[i], -a[i].dot(moment), 1e-9) << p.name << " joint " << i;
+      EXPECT_NEAR(tau[i], tau_shipped[i], 1e-12 * (1 + std::abs(tau[i]))) << p.name << " " << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace arm

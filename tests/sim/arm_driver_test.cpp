@@ -21,6 +21,7 @@
 #include "sim/arm_driver.h"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
 #include <algorithm>
 #include <cmath>
@@ -34,6 +35,7 @@
 
 #include "sim/arm_geometry.h"
 #include "sim/bed_io.h"
+#include "sim/h5_output.h"
 #include "sim/saved_run.h"
 #include "sim/scene.h"
 #include "sim/world.h"
@@ -68,6 +70,7 @@ class Recorder : public sim::ScoopDriver {
   double PlannedDuration(int pass, const sim::BedContext& bed) const override {
     return inner_->PlannedDuration(pass, bed);
   }
+  void Record(sim::H5Output* out, double time) override { inner_->Record(out, time); }
   void Finish(sim::H5Output* out) override { inner_->Finish(out); }
   sim::ScoopDriver* inner() { return inner_.get(); }
   std::vector<dem::Vec3> force, torque;
@@ -99,9 +102,16 @@ struct DigRun {
   std::vector<dem::Vec3> force, torque;
 };
 
-DigRun Dig(const sim::Scene& scene, const std::string& bed, bool with_arm, int threads) {
+// With `output`, the run's rows go to that file.
+DigRun Dig(const sim::Scene& scene, const std::string& bed, bool with_arm, int threads,
+           const std::string& output = "") {
   sim::World world(scene, threads);
   world.LoadBed(bed);
+  std::unique_ptr<sim::H5Output> out;
+  if (!output.empty()) {
+    out = std::make_unique<sim::H5Output>(output, scene.yaml_text, "test");
+    world.UseOutput(out.get());
+  }
   std::unique_ptr<sim::ScoopDriver> driver;
   if (with_arm) {
     driver = std::make_unique<sim::ArmDriver>(scene);
@@ -119,14 +129,60 @@ DigRun Dig(const sim::Scene& scene, const std::string& bed, bool with_arm, int t
   if (with_arm) run.arm = static_cast<sim::ArmDriver*>(rec->inner())->report();
   run.force = rec->force;
   run.torque = rec->torque;
+  if (out) out->Close();
   return run;
 }
+
+// /arm/fault_bits (uint64 rows) of a run file.
+std::vector<uint64_t> FaultBitRows(const std::string& path) {
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t d = H5Dopen2(f, "/arm/fault_bits", H5P_DEFAULT);
+  const hid_t type = H5Dget_type(d);
+  EXPECT_EQ(H5Tget_class(type), H5T_INTEGER);
+  const hid_t space = H5Dget_space(d);
+  std::vector<uint64_t> rows(static_cast<size_t>(H5Sget_simple_extent_npoints(space)));
+  if (!rows.empty()) H5Dread(d, H5T_NATIVE_UINT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, rows.data());
+  H5Sclose(space);
+  H5Tclose(type);
+  H5Dclose(d);
+  H5Fclose(f);
+  return rows;
+}
+
+// The (flag, joint_name) fields of /arm/fault_events, read by name from its records.
+std::vector<std::pair<uint64_t, std::string>> FaultEventRows(const std::string& path) {
+  struct Row {
+    uint64_t flag;
+    char joint_name[64];
+  };
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t d = H5Dopen2(f, "/arm/fault_events", H5P_DEFAULT);
+  EXPECT_GE(d, 0) << path << ": no /arm/fault_events";
+  const hid_t text = H5Tcopy(H5T_C_S1);
+  H5Tset_size(text, 64);
+  const hid_t type = H5Tcreate(H5T_COMPOUND, sizeof(Row));
+  H5Tinsert(type, "flag", HOFFSET(Row, flag), H5T_NATIVE_UINT64);
+  H5Tinsert(type, "joint_name", HOFFSET(Row, joint_name), text);
+  const hid_t space = H5Dget_space(d);
+  std::vector<Row> rows(static_cast<size_t>(H5Sget_simple_extent_npoints(space)));
+  if (!rows.empty()) H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, rows.data());
+  std::vector<std::pair<uint64_t, std::string>> out;
+  for (const Row& r : rows) out.emplace_back(r.flag, r.joint_name);
+  H5Sclose(space);
+  H5Tclose(type);
+  H5Tclose(text);
+  H5Dclose(d);
+  H5Fclose(f);
+  return out;
+}
+
+std::string NominalOutput() { return (TempDir() / "nominal.h5").string(); }
 
 // The nominal coupled dig on 1 thread, run once and shared by the tests below.
 const DigRun& NominalArm() {
   static const DigRun run = [] {
     const sim::Scene scene = Scene("arm/nominal_snow.yaml");
-    return Dig(scene, Bed(scene, "snow"), true, 1);
+    return Dig(scene, Bed(scene, "snow"), true, 1, NominalOutput());
   }();
   return run;
 }
@@ -157,6 +213,10 @@ TEST(ArmDriverTest, NominalSnowDigRaisesNoFault) {
   ASSERT_EQ(run.exit_status, 0);
   EXPECT_EQ(run.arm.latched, 0u);
   EXPECT_TRUE(run.arm.events.empty());
+  EXPECT_TRUE(FaultEventRows(NominalOutput()).empty());  // present, zero rows
+  const std::vector<uint64_t> bits = FaultBitRows(NominalOutput());
+  EXPECT_FALSE(bits.empty());
+  EXPECT_EQ(std::count(bits.begin(), bits.end(), 0u), static_cast<std::ptrdiff_t>(bits.size()));
   EXPECT_EQ(run.arm.time_scale, 1.0);  // the scene's speeds are within the joints' limits
   EXPECT_LT(run.arm.tracking_max, 2e-3);
   for (size_t i = 0; i < run.arm.joints.size(); ++i)
@@ -251,10 +311,19 @@ TEST(ArmDriverTest, BoulderRaisesJointTorqueLimit) {
   sim::World probe(scene, 1);
   probe.LoadBed(bed);
   const double start = probe.system().time();
-  const DigRun run = Dig(scene, bed, true, 2);
+  const std::string output = (TempDir() / "boulder.h5").string();
+  const DigRun run = Dig(scene, bed, true, 2, output);
   // The blade meets the sphere in the push; the demand reaches 73 N m ~0.69 s into it.
   ExpectTorqueLimitOnProxPitch(run, scene, 0.45, 0.9, start);
   EXPECT_GT(run.arm.peak_demanded[kProxPitch], run.arm.effort_limit[kProxPitch]);
+  // The rows show the fault (issue 40): the stop reaction drops the demand within the event's
+  // row, so only the OR over the row's interval holds bit 32; the event names its joint.
+  const std::vector<uint64_t> bits = FaultBitRows(output);
+  EXPECT_TRUE(std::any_of(bits.begin(), bits.end(),
+                          [](uint64_t b) { return (b & kJointTorqueLimit) != 0; }));
+  const auto events = FaultEventRows(output);
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events.front(), std::make_pair(kJointTorqueLimit, std::string("j_prox_pitch")));
 }
 
 TEST(ArmDriverTest, WornMotorDiggingIceRaisesJointTorqueLimit) {

@@ -125,6 +125,48 @@ TEST(BalovnevTest, ZeroDepthGivesZeroForceAndForceGrowsWithDepth) {
   EXPECT_NEAR(tiny.horizontal, edge0, 1e-9 * edge0);
 }
 
+// The lander plugin's variant (BalovnevLander; FACTS.md section 7), by hand from the values above
+// (A_II(10) = 0.892735831535437, A_II(30) = 1.75192184688878, A_II(90) = 13.2400618767841,
+// K = 0.180178869596178; its own gamma = 1700 x 1.315 = 2235.5 N/m^3, q = 1.315 x 1 = 1.315 Pa,
+// b = 0, A_II everywhere; 1 + tan28/tan10 = 4.01547403310101, 1 + tan28/tan30 = 1.92094775050125,
+// 2 s + 4 l_s tan28 = 0.263737621514125; caps F_h <= 40 N, then F_v = min(F_h cot 38, 30 N),
+// cot 38 = 1.27994163219308, so the F_v cap binds from F_h = 23.4386 N):
+// d = 0.02 m: P(d) = 2235.5 x 0.02 / 2 + 1.315 = 23.67 Pa, P(e) = 1.7621 Pa
+//   F_1 = 0.085 x 0.02 x 0.892736 x 4.015474 x 23.67                  = 0.144247059
+//   F_2 = 0.085 x 0.0004 x 1.751922 x 1.920948 x (1.7621 + 0.02 x 2235.5 K) = 0.00112338257
+//   F_3 = 0.02 x 13.240062 x 0.263738 x 23.67                         = 1.65306661
+//   F_h = 1.79843705 (under 40), F_v = 1.79843705 x 1.279942 = 2.30189445 (under 30)
+// d = 0.08 m: P(d) = 90.735 Pa; F_1 = 2.21178824, F_2 = 0.00388866173, F_3 = 25.3470213
+//   F_h = 27.5626982 (under 40), F_h cot 38 = 35.278645 -> F_v = 30 (capped)
+// d = 0.25 m: P(d) = 280.7525 Pa; F_1 = 21.3866299, F_2 = 0.0117236193, F_3 = 245.090084
+//   F_h = 266.488438 -> 40 (capped), 40 cot 38 = 51.2 -> F_v = 30 (capped)
+// The soil's unit weight and surcharge are the plugin's own, whatever the caller's (a DEM bed's
+// gamma here). Tolerance: relative 1e-8 (hand values to 9 digits).
+TEST(BalovnevTest, LanderPluginVariantMatchesHandValuesWithItsCaps) {
+  const BalovnevTool tool;
+  BalovnevSoil soil = PluginSoil();
+  soil.unit_weight = 1326.6 * 1.3;  // ignored by the variant
+  soil.surcharge = 7;               // ignored
+  struct Case {
+    double depth, blade, edge, sides, horizontal, vertical;
+  };
+  const Case cases[] = {{0.02, 0.144247059, 0.00112338257, 1.65306661, 1.79843705, 2.30189445},
+                        {0.08, 2.21178824, 0.00388866173, 25.3470213, 27.5626982, 30},
+                        {0.25, 21.3866299, 0.0117236193, 245.090084, 40, 30}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.depth);
+    const BalovnevForce f = BalovnevLander(c.depth, tool, soil);
+    EXPECT_NEAR(f.blade, c.blade, 1e-8 * c.blade);
+    EXPECT_NEAR(f.edge, c.edge, 1e-8 * c.edge);
+    EXPECT_NEAR(f.sides, c.sides, 1e-8 * c.sides);
+    EXPECT_NEAR(f.horizontal, c.horizontal, 1e-8 * c.horizontal);
+    EXPECT_NEAR(f.vertical, c.vertical, 1e-8 * c.vertical);
+  }
+  EXPECT_EQ(BalovnevLander(0, tool, soil).horizontal, 0.0);
+  EXPECT_STREQ(BalovnevModelName(BalovnevModel::kLander), "lander");
+  EXPECT_STREQ(BalovnevModelName(BalovnevModel::kTextbook), "textbook");
+}
+
 // Bad inputs: one std::invalid_argument naming the value.
 TEST(BalovnevTest, RefusesInputsOutsideTheModel) {
   const BalovnevTool tool;

@@ -253,7 +253,8 @@ std::string WriteSphereScene() {
 // (h, 0, 0) to 1e-12 m, h as the STL stores it (a float: 0.01f); depth = max(0, surface - tip_z)
 // (1e-12 m); the DEM's horizontal and downward forces are -F_world.x and -F_world.z of the run
 // file, exactly (the CSV writes 17 digits); Balovnev's columns are sim::Balovnev at the row's depth
-// with the soil the CSV's header states (gamma = rho_bulk g; relative 1e-12). The table is printed,
+// with the soil the CSV's header states (gamma = rho_bulk g; relative 1e-12), the lander's columns
+// sim::BalovnevLander at that depth (its own gamma and q). The table is printed,
 // the PNG drawn.
 TEST(BalovnevStudyTest, CsvMatchesTheRunAndTheModel) {
   const std::string scene = WriteSphereScene();
@@ -265,7 +266,9 @@ TEST(BalovnevStudyTest, CsvMatchesTheRunAndTheModel) {
             0)
       << scoopsim_test::ReadText(log);
   const std::string printed = scoopsim_test::ReadText(table);
-  EXPECT_NE(printed.find("| t [s] | rho [mm] | depth [mm] | DEM F_h [N] |"), std::string::npos)
+  EXPECT_NE(printed.find("| t [s] | rho [mm] | depth [mm] | DEM F_h [N] | textbook F_h [N] | "
+                         "textbook A_II F_h [N] | lander F_h [N] |"),
+            std::string::npos)
       << printed;
   EXPECT_NE(printed.find("| mean, rows cut |"), std::string::npos) << printed;
   EXPECT_TRUE(fs::exists(TempDir() / "balovnev.balovnev.png"));
@@ -293,7 +296,7 @@ TEST(BalovnevStudyTest, CsvMatchesTheRunAndTheModel) {
     std::vector<double> v;
     std::stringstream fields(line);
     for (std::string field; std::getline(fields, field, ',');) v.push_back(std::stod(field));
-    ASSERT_EQ(v.size(), 14u) << line;
+    ASSERT_EQ(v.size(), 16u) << line;
     data.push_back(v);
   }
   ASSERT_EQ(data.size(), rows);
@@ -319,10 +322,33 @@ TEST(BalovnevStudyTest, CsvMatchesTheRunAndTheModel) {
     EXPECT_NEAR(v[11], split.vertical, 1e-12 * split.vertical);
     EXPECT_NEAR(v[12], plugin.horizontal, 1e-12 * plugin.horizontal);
     EXPECT_NEAR(v[13], plugin.vertical, 1e-12 * plugin.vertical);
+    // The lander plugin's variant: its own constants whatever the bed (sim::BalovnevLander).
+    const sim::BalovnevForce lander = sim::BalovnevLander(v[7], tool, soil);
+    EXPECT_NEAR(v[14], lander.horizontal, 1e-12 * lander.horizontal);
+    EXPECT_NEAR(v[15], lander.vertical, 1e-12 * lander.vertical);
     if (v[7] > 0) ++cut;
   }
   // The tip, 10 mm under the mean surface, lies under the local one (grains of 5 mm) on most rows.
   EXPECT_GT(cut, static_cast<int>(rows) / 2);
+}
+
+// --model lander: the table shows the DEM and the lander plugin's variant only (the textbook
+// columns stay in the CSV); an unknown model is refused with exit 2.
+TEST(BalovnevStudyTest, ModelChoosesTheVariantShown) {
+  const std::string scene = WriteSphereScene();
+  const std::string out = (TempDir() / "balovnev_lander.h5").string();
+  const std::string table = (TempDir() / "balovnev_lander.txt").string();
+  ASSERT_EQ(scoopsim_test::RunScoopsim("study balovnev " + scene + " -o " + out +
+                                       " --threads 1 -q --no-plot --model lander > " + table),
+            0);
+  const std::string printed = scoopsim_test::ReadText(table);
+  EXPECT_NE(printed.find("| DEM F_h [N] | lander F_h [N] | DEM F_v down [N] | lander F_v [N] |"),
+            std::string::npos)
+      << printed;
+  EXPECT_EQ(printed.find("textbook"), std::string::npos) << printed;
+  EXPECT_EQ(scoopsim_test::RunScoopsim("study balovnev " + scene + " -o " + out + " --model nope",
+                                       (TempDir() / "balovnev_model.log").string()),
+            2);
 }
 
 // Bad input: delta above phi (Balovnev's psi is undefined there) is one line, exit 2, before any

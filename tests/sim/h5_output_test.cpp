@@ -319,6 +319,70 @@ TEST_F(H5Test, SetGroupPutsRowsAndAttributesUnderIt) {
 }
 
 // A series keeps the width of its first row; another width is a programming error.
+// Issue 40: bit masks are uint64 series (2^63 + 1 reads back exactly, which a float64 would
+// not hold), and a dataset keeps the type of its first row; a series' string attribute set before
+// its first row is on the dataset; a table of records (zero rows, or two with text read back by
+// field name) is one compound dataset. The old readers' float64 bit masks read as integers too
+// (h5::Reader with H5T_NO_CLASS).
+TEST_F(H5Test, BitSeriesAttributesAndTables) {
+  const std::string path = Path("bits.h5");
+  const uint64_t big = (uint64_t{1} << 63) + 1;
+  {
+    H5Output out(path, "", "v");
+    out.SetSeriesAttribute("/s/pose", "quaternion_order", kQuaternionOrder);
+    const double pose[7] = {1, 2, 3, 1, 0, 0, 0};
+    out.AppendRow("/s/pose", pose, 7);
+    for (const uint64_t b : {uint64_t{0}, uint64_t{32}, big}) out.AppendRow("/s/bits", &b, 1);
+    const double old_bits = 32;
+    out.AppendRow("/s/old_bits", &old_bits, 1);
+    EXPECT_THROW(out.AppendRow("/s/bits", &old_bits, 1), std::invalid_argument);
+    using Column = H5Output::TableColumn;
+    Column flag{"flag", Column::Kind::kUint64, {}, {32, 256}, {}, {}};
+    Column joint{"joint_name", Column::Kind::kText, {}, {}, {}, {"j_prox_pitch", "-"}};
+    Column index{"joint", Column::Kind::kInt32, {}, {}, {2, -1}, {}};
+    out.WriteTable("/s/events", {flag, joint, index}, 2);
+    out.WriteTable("/s/none", {flag}, 0);
+  }
+  Handle file = OpenFile(path);
+  ASSERT_TRUE(file.valid());
+  EXPECT_EQ(Read<uint64_t>(file.get(), "/s/bits", H5T_NATIVE_UINT64),
+            (std::vector<uint64_t>{0, 32, big}));
+  {
+    Handle d(H5Dopen2(file.get(), "/s/bits", H5P_DEFAULT), H5Dclose);
+    Handle type(H5Dget_type(d.get()), H5Tclose);
+    EXPECT_EQ(H5Tget_class(type.get()), H5T_INTEGER);
+    EXPECT_EQ(H5Tget_size(type.get()), 8u);
+    EXPECT_EQ(H5Tget_sign(type.get()), H5T_SGN_NONE);
+    Handle pose(H5Dopen2(file.get(), "/s/pose", H5P_DEFAULT), H5Dclose);
+    EXPECT_EQ(sim::h5::ReadStringAttribute(pose.get(), "quaternion_order"), "w x y z");
+  }
+  const sim::h5::Reader in(path, file.get());
+  EXPECT_EQ(in.Read<uint64_t>("/s/old_bits", H5T_NO_CLASS, H5T_NATIVE_UINT64, 1, 1),
+            std::vector<uint64_t>{32});
+  EXPECT_EQ(in.Read<uint64_t>("/s/bits", H5T_NO_CLASS, H5T_NATIVE_UINT64, 3, 1)[2], big);
+  struct Row {
+    uint64_t flag;
+    char joint_name[32];
+    int32_t joint;
+  };
+  Handle text(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(text.get(), 32);
+  Handle row(H5Tcreate(H5T_COMPOUND, sizeof(Row)), H5Tclose);
+  H5Tinsert(row.get(), "flag", HOFFSET(Row, flag), H5T_NATIVE_UINT64);
+  H5Tinsert(row.get(), "joint_name", HOFFSET(Row, joint_name), text.get());
+  H5Tinsert(row.get(), "joint", HOFFSET(Row, joint), H5T_NATIVE_INT32);
+  std::vector<Row> rows(2);
+  Handle events(H5Dopen2(file.get(), "/s/events", H5P_DEFAULT), H5Dclose);
+  ASSERT_GE(H5Dread(events.get(), row.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, rows.data()), 0);
+  EXPECT_EQ(rows[0].flag, 32u);
+  EXPECT_STREQ(rows[0].joint_name, "j_prox_pitch");
+  EXPECT_EQ(rows[0].joint, 2);
+  EXPECT_EQ(rows[1].flag, 256u);
+  EXPECT_STREQ(rows[1].joint_name, "-");
+  EXPECT_EQ(rows[1].joint, -1);
+  EXPECT_EQ(Dims(file.get(), "/s/none"), std::vector<hsize_t>{0});
+}
+
 TEST_F(H5Test, AppendRowRejectsAWidthChange) {
   H5Output out(Path("run.h5"), "", "v");
   const double row[3] = {1, 2, 3};

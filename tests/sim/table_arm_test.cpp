@@ -323,13 +323,31 @@ TEST(TableArm, AWrenchPastAJointsCapacityRaisesJointTorqueLimitOnThatJoint) {
   ASSERT_GE(expected_joint, 0) << "no wrench axis loads one joint alone";
   const TableRun r = RunTable("overload", HoldScene(WriteTable("overload", w)));
   ASSERT_EQ(r.result.exit_status, 0);
-  int width = 0;
-  const std::vector<double> events = ReadRows(r.output, "/arm/fault_events", &width);
-  ASSERT_EQ(width, 5);
+  // /arm/fault_events: one record per event; its flag and joint fields, read by name.
+  struct Event {
+    uint64_t flag;
+    int32_t joint;
+  };
+  std::vector<Event> events;
+  {
+    const hid_t f = H5Fopen(r.output.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    const hid_t d = H5Dopen2(f, "/arm/fault_events", H5P_DEFAULT);
+    ASSERT_GE(d, 0);
+    const hid_t type = H5Tcreate(H5T_COMPOUND, sizeof(Event));
+    H5Tinsert(type, "flag", HOFFSET(Event, flag), H5T_NATIVE_UINT64);
+    H5Tinsert(type, "joint", HOFFSET(Event, joint), H5T_NATIVE_INT32);
+    const hid_t space = H5Dget_space(d);
+    events.resize(static_cast<size_t>(H5Sget_simple_extent_npoints(space)));
+    if (!events.empty()) H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, events.data());
+    H5Sclose(space);
+    H5Tclose(type);
+    H5Dclose(d);
+    H5Fclose(f);
+  }
   bool found = false;
-  for (size_t e = 0; e < events.size(); e += 5) {
-    if (static_cast<uint64_t>(events[e + 1]) != kJointTorqueLimit) continue;
-    EXPECT_EQ(static_cast<int>(events[e + 2]), expected_joint) << model.joints[expected_joint].name;
+  for (const Event& e : events) {
+    if (e.flag != kJointTorqueLimit) continue;
+    EXPECT_EQ(e.joint, expected_joint) << model.joints[expected_joint].name;
     found = true;
     break;
   }

@@ -263,6 +263,30 @@ TEST_F(WrenchTableTest, CommandLine) {
   EXPECT_EQ(scoopsim_test::RunScoopsim("table query " + table +
                                        " --material snow --bite-depth-mm 20 --pass 2 --rho-mm 1"),
             2);
+  // Metres (as scenes and the CSV have them): the same line; mm and m of one quantity together,
+  // or neither, are one line and exit 2.
+  const std::string metres = (dir_ / "query_m.json").string();
+  ASSERT_EQ(scoopsim_test::RunScoopsim(
+                "table query " + table +
+                " --material snow --bite-depth 0.010 --pass 2 --rho 0.120 >" + metres),
+            0);
+  std::stringstream json_m;
+  json_m << std::ifstream(metres).rdbuf();
+  EXPECT_EQ(json_m.str(), json.str());
+  const std::string err = (dir_ / "query_both.txt").string();
+  EXPECT_EQ(scoopsim_test::RunScoopsim("table query " + table +
+                                           " --material snow --bite-depth 0.01 --bite-depth-mm 10 "
+                                           "--pass 2 --rho 0.12",
+                                       err),
+            2);
+  std::stringstream both;
+  both << std::ifstream(err).rdbuf();
+  EXPECT_EQ(both.str(),
+            "scoopsim: --bite-depth and --bite-depth-mm: expected one of them (metres or "
+            "millimetres), got both\n");
+  EXPECT_EQ(scoopsim_test::RunScoopsim("table query " + table +
+                                       " --material snow --bite-depth 0.01 --pass 2"),
+            2);
   EXPECT_EQ(scoopsim_test::RunScoopsim("table export-csv " + table + " -o " +
                                        (dir_ / "cli.csv").string()),
             0);

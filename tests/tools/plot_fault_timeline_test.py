@@ -17,18 +17,30 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 SCRIPT = os.path.join(ROOT, "tools", "plot_fault_timeline.py")
 
 
-def make_run(path, fault=True, drop=None):
+EVENT = np.dtype([("time", "<f8"), ("flag", "<u8"), ("flag_name", "S19"), ("joint", "<i4"),
+                  ("joint_name", "S4"), ("value", "<f8"), ("limit", "<f8")])
+
+
+def make_run(path, fault=True, drop=None, old=False):
     """Three joints a, b, c; 1 ms rows from t = 2 s (start_time) for 1 s; j_b's demand ramps to
-    twice its 10 N m limit, crossing it at 0.5 s; the flag (32) on joint 1 at 0.6 s."""
+    twice its 10 N m limit, crossing it at 0.5 s; the flag (32) on joint 1 at 0.6 s. The fault
+    datasets as scoopsim writes them (uint64 bits, /arm/fault_events a table of records, zero rows
+    without a fault), or with `old` as before issue 40 (float64, e x 5, absent without a fault)."""
     t = 2.0 + np.arange(1000) * 1e-3
     limit = np.tile([50.0, 10.0, 5.0], (t.size, 1))
     demanded = np.stack([np.full(t.size, 5.0), 20.0 * (t - 2.0) if fault else 0.5 * (t - 2.0),
                          np.full(t.size, 1.0)], axis=1)
     data = {"time": t, "torque_demanded": demanded,
             "torque_applied": np.clip(demanded, -limit, limit), "effort_limit": limit,
-            "fault_latched": np.where(t >= 2.6, 32.0, 0.0) if fault else np.zeros(t.size)}
-    if fault:
-        data["fault_events"] = np.array([[2.6, 32.0, 1.0, 12.0, 10.0]])
+            "fault_latched": np.where(t >= 2.6, 32, 0).astype(np.uint64) if fault
+            else np.zeros(t.size, np.uint64)}
+    if old:
+        data["fault_latched"] = data["fault_latched"].astype(np.float64)
+        if fault:
+            data["fault_events"] = np.array([[2.6, 32.0, 1.0, 12.0, 10.0]])
+    else:
+        data["fault_events"] = (np.array([(2.6, 32, b"JOINT_TORQUE_LIMIT", 1, b"j_b", 12.0, 10.0)],
+                                         dtype=EVENT) if fault else np.zeros(0, dtype=EVENT))
     with h5py.File(path, "w") as f:
         f.attrs["arm_joints"] = "j_a,j_b,j_c"
         f.attrs["start_time"] = 2.0
@@ -54,6 +66,11 @@ def main():
         with open(png, "rb") as f:
             assert f.read(8) == b"\x89PNG\r\n\x1a\n"
         assert os.path.getsize(png) > 10000
+        old = os.path.join(d, "old.h5")
+        make_run(old, old=True)
+        result = run([old, "-o", os.path.join(d, "old.png")])
+        assert result.returncode == 0, result.stderr
+        assert "JOINT_TORQUE_LIMIT on j_b at 0.600 s" in result.stdout, result.stdout
         png2 = os.path.join(d, "sub", "joint_c.png")
         result = run([fault, "-o", png2, "--joint", "j_c"])
         assert result.returncode == 0 and os.path.exists(png2), result.stderr
