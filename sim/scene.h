@@ -218,10 +218,18 @@ struct Scene {
 };
 
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.
-Scene LoadScene(const std::string& path);
+// `sets`: the command line's `--set KEY=VALUE` overrides, written into the scene before it is
+// checked (and kept in its yaml_text as `# scoopsim --set KEY=VALUE` lines at the end, so the text
+// stored with a run holds them); an error about an overridden key names `--set KEY=VALUE` for the
+// file and line.
+Scene LoadScene(const std::string& path, const std::vector<std::string>& sets = {});
 // The same for a scene text that is not (or not yet) a file, such as a sweep's case: `path`
-// names it in messages and files named in it are relative to its folder.
+// names it in messages and files named in it are relative to its folder. Applies the overrides
+// the text holds.
 Scene LoadSceneText(const std::string& path, const std::string& yaml_text);
+// `error` reworded to name the override it is about (`--set KEY=VALUE: KEY: expected ...`) when
+// its line is one of `sets`' (an error found after LoadScene, sim/preflight.h); else `error`.
+InputError NamingSet(const InputError& error, const std::vector<std::string>& sets);
 
 // The 1-based line of the dotted key `key` ("bed.radius", "dig.scoop.scale") in the scene's text,
 // or of its nearest parent there; 1 when none. For errors found after LoadScene (sim/preflight.h).
