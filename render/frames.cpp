@@ -1,12 +1,47 @@
 #include "render/frames.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
 
+#include "dem/transform.h"
+
 namespace render {
+
+void PresetBounds(const std::string& preset, const sim::WorldView& view, dem::Vec3* lo,
+                  dem::Vec3* hi) {
+  *lo = view.box_min;
+  *hi = view.box_max;
+  auto grow = [&](const dem::Vec3& p) {
+    *lo = {std::min(lo->x, p.x), std::min(lo->y, p.y), std::min(lo->z, p.z)};
+    *hi = {std::max(hi->x, p.x), std::max(hi->y, p.y), std::max(hi->z, p.z)};
+  };
+  if (preset == "arm") {
+    for (const sim::MeshView& m : view.meshes)
+      for (const dem::Vec3& v : m.mesh->vertices) grow(dem::Apply(m.pose, v));
+  } else if (preset == "scoop") {
+    dem::Vec3 scoop_lo{1e300, 1e300, 1e300}, scoop_hi{-1e300, -1e300, -1e300};
+    for (const sim::MeshView& m : view.meshes) {
+      if (m.role != sim::MeshRole::kScoop) continue;
+      for (const dem::Vec3& v : m.mesh->vertices) {
+        const dem::Vec3 p = dem::Apply(m.pose, v);
+        scoop_lo = {std::min(scoop_lo.x, p.x), std::min(scoop_lo.y, p.y),
+                    std::min(scoop_lo.z, p.z)};
+        scoop_hi = {std::max(scoop_hi.x, p.x), std::max(scoop_hi.y, p.y),
+                    std::max(scoop_hi.z, p.z)};
+      }
+    }
+    if (scoop_lo.x <= scoop_hi.x) {
+      const dem::Vec3 centre = 0.5 * (scoop_lo + scoop_hi);
+      const dem::Vec3 half{0.5 * kScoopFrame, 0.5 * kScoopFrame, 0.5 * kScoopFrame};
+      *lo = centre - half;
+      *hi = centre + half;
+    }
+  }
+}
 
 FrameOptions FrameOptionsFromSpec(const sim::RenderSpec& spec) {
   FrameOptions options;
@@ -56,8 +91,17 @@ void FrameSequence::Add(const sim::WorldView& view) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   RenderSettings settings = options_.settings;
-  if (!options_.camera_preset.empty()) {
-    ApplyCameraPreset(options_.camera_preset, view.box_min, view.box_max, &settings.camera);
+  if (camera_fixed_) {
+    settings.camera = fixed_camera_;
+  } else if (!options_.camera_preset.empty()) {
+    dem::Vec3 lo, hi;
+    PresetBounds(options_.camera_preset, view, &lo, &hi);
+    ApplyCameraPreset(options_.camera_preset, lo, hi, &settings.camera);
+    // The arm's frame is set once: a camera that followed the links' extent would jitter.
+    if (options_.camera_preset == "arm") {
+      fixed_camera_ = settings.camera;
+      camera_fixed_ = true;
+    }
   }
   const Image& image = renderer_->Render(view, settings);
   const auto t1 = Clock::now();

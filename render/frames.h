@@ -25,6 +25,13 @@ struct FrameOptions {
   int threads = 0;            // LP_NUM_THREADS when unset (0 = llvmpipe's default)
 };
 
+// The box a camera preset frames in `view` (render/camera.h): the bed container (trench_side,
+// trench_oblique, top); it and every mesh of the view, the arm's links and scoop included (arm);
+// a cube of side kScoopFrame centred on the scoop's mesh (scoop; the container without a scoop).
+constexpr double kScoopFrame = 0.3;  // [m]
+void PresetBounds(const std::string& preset, const sim::WorldView& view, dem::Vec3* lo,
+                  dem::Vec3* hi);
+
 // Frame options from a scene's `render:` block (camera, colour field, size). Throws
 // sim::InputError for a colour field or preset this build does not know.
 FrameOptions FrameOptionsFromSpec(const sim::RenderSpec& spec);
@@ -52,6 +59,8 @@ class FrameSequence {
 
  private:
   FrameOptions options_;
+  bool camera_fixed_ = false;  // the arm preset's camera, framed at the first frame
+  Camera fixed_camera_;
   std::unique_ptr<Renderer> renderer_;
   int count_ = 0;
   double draw_seconds_ = 0, png_seconds_ = 0;

@@ -98,8 +98,9 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
       if (stored.empty() && !scoop_mesh.triangles.empty())
         view.meshes.push_back({&scoop_mesh, scoop.pose[k]});
     }
-    // The arm's torque bars and fault flags at the last /arm/ sample at or before it.
-    const int a = arm.empty() ? -1 : sim::SampleAt(arm.time, snapshot.time);
+    // The arm's torque bars and fault flags at the last /arm/ sample at or before it (the first
+    // sample for a snapshot before it: the dig's first, taken before the first step).
+    const int a = arm.empty() ? -1 : std::max(sim::SampleAt(arm.time, snapshot.time), 0);
     if (a >= 0) {
       const size_t n = arm.joints.size();
       for (size_t j = 0; j < n; ++j)

@@ -126,7 +126,8 @@ struct RenderSpec {
 };
 // Camera presets a scene may name (render/camera.cpp frames each; a render test checks both
 // lists agree).
-inline const char* const kRenderCameraPresets[] = {"trench_side", "trench_oblique", "top"};
+inline const char* const kRenderCameraPresets[] = {"trench_side", "trench_oblique", "top", "arm",
+                                                   "scoop"};
 
 // A fixed rigid sphere in the bed (key `obstacles:`, a buried boulder). The particles meet it as
 // a fixed triangle mesh (World::StartDig takes out the particles it overlaps); a scoop held by the

@@ -312,6 +312,10 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver, const DigResume* resum
   started_ = true;
   dig.pass = first_pass;
   if (!Done()) BeginPass();
+  // A snapshot at the dig's start (the scoop placed, the arm at its first pose), as a plain run
+  // has one at its start: a replay's first frame. (A resumed dig has it already.)
+  if (out_ && resume == nullptr && scene_.output.snapshot_every > 0)
+    out_->WriteSnapshot(system_->time(), system_->particles(), View().meshes);
 }
 
 DigResume World::ResumePoint() const { return {dig_->pass, dig_->bed.surface, dig_->bed.clear_z}; }
@@ -723,9 +727,13 @@ RunResult World::Run(const RunControl& control) {
       }
       const bool failed = owned_out_->failed();
       owned_out_->Close();
-      if (!failed) {
+      // The XDMF sidecar exists only with snapshots: a run names no file it did not write.
+      if (!failed && owned_out_->snapshot_count() > 0) {
         Status("scoopsim: wrote %s (ParaView: %s)\n", owned_out_->path().c_str(),
                owned_out_->xdmf_path().c_str());
+      } else if (!failed) {
+        Status("scoopsim: wrote %s (no snapshots: output.snapshot_every is 0)\n",
+               owned_out_->path().c_str());
       }
     } catch (const std::exception& e) {
       if (result.exit_status != kExitFailure) Status("scoopsim: output failed: %s\n", e.what());

@@ -310,8 +310,38 @@ TEST(ArmDriverTest, BoulderWithRetractLiftsTheScoop) {
               scene.arm.substeps * scene.time_step + scene.time_step);
 }
 
+// A frame at the dig's start draws the torques holding the arm up (the PID's preloaded integral,
+// arm::GravityTorques), not empty bars: the view's demanded torques before the first step are,
+// for every joint, those of the first step within 2% of the joint's limit, and j_prox_pitch's is
+// a visible share of its limit (> 5%; ~5.5 N m of 73 in the nominal pose).
+TEST(ArmDriverTest, TorqueBarsAtTheDigsStartShowTheHoldingTorques) {
+  const sim::Scene scene = Scene("arm/nominal_snow.yaml");
+  sim::World world(scene, 1);
+  world.LoadBed(Bed(scene, "snow"));
+  auto driver = std::make_unique<sim::ArmDriver>(scene);
+  const sim::ArmDriver* arm = driver.get();
+  world.StartDig(std::move(driver));
+  auto joints = [arm] {
+    sim::WorldView view;  // what World::View() hands a frame
+    arm->AddToView(&view);
+    return view.joints;
+  };
+  const std::vector<sim::JointView> first = joints();
+  ASSERT_TRUE(world.Step().ok());
+  const std::vector<sim::JointView> stepped = joints();
+  ASSERT_EQ(first.size(), 6u);
+  ASSERT_EQ(stepped.size(), 6u);
+  for (size_t j = 0; j < first.size(); ++j)
+    EXPECT_NEAR(first[j].torque, stepped[j].torque, 0.02 * first[j].limit) << first[j].name;
+  EXPECT_GT(std::abs(first[kProxPitch].torque), 0.05 * first[kProxPitch].limit);
+  std::printf("frame 0: j_prox_pitch %.4g N m of %.4g (%.1f%%)\n", first[kProxPitch].torque,
+              first[kProxPitch].limit,
+              100 * std::abs(first[kProxPitch].torque) / first[kProxPitch].limit);
+}
+
 // The snapshots of a coupled dig hold the scoop and the arm's links where they were. The nominal
-// dig, stepped 0.3 s with a snapshot every 2000 steps: at each snapshot the test records the
+// dig, stepped 0.3 s with a snapshot at its start and every 2000 steps: at each snapshot the test
+// records the
 // scoop's DEM pose and Bullet's joint positions. In the file (read back through sim::SavedRun),
 // the scoop's points are the scene's scoop mesh moved by that pose, and the arm's points are
 // sim::ArmGeometry's link meshes at the poses forward kinematics gives for those joint positions
@@ -332,7 +362,11 @@ TEST(ArmDriverTest, SnapshotsHoldTheScoopAndTheLinksWhereTheyWere) {
     const sim::ArmDriver* arm = driver.get();
     world.StartDig(std::move(driver));
     const double start = world.system().time();
+    // The first snapshot, at the dig's start: the scoop placed, the arm at its first pose.
     int64_t snapshots = world.output()->snapshot_count();
+    ASSERT_EQ(snapshots, 1);
+    scoop.push_back(world.system().mesh_motion(0).pose);
+    q.push_back(arm->JointPositions());
     while (world.system().time() - start < 0.3) {
       ASSERT_TRUE(world.Step().ok());
       if (world.output()->snapshot_count() == snapshots) continue;
