@@ -580,7 +580,7 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
 }
 
 std::string Caption(const sim::WorldView& view) {
-  std::string text = "t = " + Format("%.5f", view.time - view.clock_start) + " s";
+  std::string text = "t = " + Format("%.5f", view.time) + " s";
   if (view.pass > 0) {
     text += "   pass " + std::to_string(view.pass) + "   rho = " + Format("%.4f", view.rho) + " m";
   }

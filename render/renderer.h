@@ -76,8 +76,8 @@ class Renderer {
   std::unique_ptr<Impl> impl_;
 };
 
-// Caption text for a view: "t = 0.01234 s" on the view's clock (time - clock_start: from the
-// dig's start, not the pour's), plus pass and rho when the view has a dig (pass > 0) and |F| when
+// Caption text for a view: "t = 0.01234 s" on the run's one clock (README "One clock"), plus
+// pass and rho when the view has a dig (pass > 0) and |F| when
 // it has a dig or a force.
 std::string Caption(const sim::WorldView& view);
 

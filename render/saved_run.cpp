@@ -36,7 +36,6 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
   }
 
   const sim::ArmSeries arm = run.Arm();
-  const double clock_start = run.RootNumber("start_time", 0.0);
 
   dem::Particles particles;
   // One colour range for the whole sequence: from every snapshot's field, unless given.
@@ -62,7 +61,6 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
 
     sim::WorldView view;
     view.time = snapshot.time;
-    view.clock_start = clock_start;
     view.particles = &particles;
     if (scene.has_gravity) view.gravity = scene.gravity;
     if (scene.has_box) {

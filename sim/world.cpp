@@ -538,7 +538,6 @@ void World::Record() {
 WorldView World::View() const {
   WorldView view;
   view.time = system_->time();
-  view.clock_start = t_start_;
   view.particles = &system_->particles();
   view.box_min = scene_.box_min;
   view.box_max = scene_.box_max;
@@ -581,6 +580,7 @@ RunResult World::Run(const RunControl& control) {
   dem::System& system = *system_;
   if (!dig_ && !started_) StartPlain();
   Progress progress(dig_ ? "dig" : "run", PlannedDuration(), control.quiet);
+  progress.set_clock_start(t_start_);  // one clock: the state's (README "One clock")
   progress.Begin(system.time() - t_start_, particle_steps_);  // a resumed run: from its checkpoint
   const auto wall0 = std::chrono::steady_clock::now();
   const dem::PhaseTimes phases0 = system.phase_times();
@@ -696,12 +696,12 @@ RunResult World::Run(const RunControl& control) {
     summary_.steps = system.step_count() - step0_;
     summary_.simulated = system.time() - t_start_;
     Status(
-        "scoopsim: dig: %lld particles, %lld steps, %.4g s simulated; peak |F| %.4g N, mean "
-        "|F| %.4g N (after first contact), peak |T| %.4g N m; %lld neighbour builds, %.3g "
-        "awake particle-steps per step\n",
+        "scoopsim: dig: %lld particles, %lld steps, %.4g s simulated (t = %.4f to %.4f s); "
+        "peak |F| %.4g N, mean |F| %.4g N (after first contact), peak |T| %.4g N m; %lld "
+        "neighbour builds, %.3g awake particle-steps per step\n",
         static_cast<long long>(summary_.particles), static_cast<long long>(summary_.steps),
-        summary_.simulated, summary_.peak_force, summary_.mean_force, summary_.peak_torque,
-        static_cast<long long>(system.neighbor_stats().builds),
+        summary_.simulated, t_start_, system.time(), summary_.peak_force, summary_.mean_force,
+        summary_.peak_torque, static_cast<long long>(system.neighbor_stats().builds),
         static_cast<double>(particle_steps_) / std::max<int64_t>(1, summary_.steps));
     Status("scoopsim: dig: %.1f s wall (%.3g x real time): %s\n", result.wall,
            summary_.simulated / std::max(result.wall, 1e-9),

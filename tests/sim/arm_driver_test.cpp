@@ -21,9 +21,12 @@
 #include "sim/arm_driver.h"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <ios>
@@ -419,6 +422,109 @@ TEST(ArmDriverTest, SnapshotsHoldTheScoopAndTheLinksWhereTheyWere) {
     EXPECT_EQ(v0, a.vertices.size());
     EXPECT_EQ(t0, a.triangles.size());
   }
+}
+
+// The first number after `prefix` in `text` (NaN when absent).
+double NumberAfter(const std::string& text, const std::string& prefix) {
+  const size_t at = text.find(prefix);
+  return at == std::string::npos ? std::nan("")
+                                 : std::strtod(text.c_str() + at + prefix.size(), nullptr);
+}
+
+// Column 0 of every row of a rank-2 numeric dataset (empty when missing).
+std::vector<double> FirstColumn(const std::string& path, const std::string& name) {
+  std::vector<double> column;
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return column;
+  if (H5Lexists(file, name.c_str(), H5P_DEFAULT) > 0) {
+    const hid_t d = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+    const hid_t space = H5Dget_space(d);
+    hsize_t dims[2] = {0, 1};
+    if (H5Sget_simple_extent_ndims(space) == 2) {
+      H5Sget_simple_extent_dims(space, dims, nullptr);
+      std::vector<double> all(dims[0] * dims[1]);
+      if (!all.empty() &&
+          H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, all.data()) >= 0)
+        for (hsize_t r = 0; r < dims[0]; ++r) column.push_back(all[r * dims[1]]);
+    }
+    H5Sclose(space);
+    H5Dclose(d);
+  }
+  H5Fclose(file);
+  return column;
+}
+
+// One clock (README "One clock"): every time a run prints is the time its datasets hold. The
+// nominal scene from its saved bed with j_prox_pitch derated to 5% (below its gravity torque, ~4 N
+// m, so the flag rises one hold time in) and a snapshot every 1000 steps, stopped 0.15 s into the
+// dig, on the command line (`--set`). Compared, to the digits printed (4 decimals: 5e-5 s; 6
+// significant: 1e-6 s): the dig's start on stderr and the root attribute start_time, the first
+// /arm/ and /scoop/ rows (within one row, dig.interval) and the first snapshot (exactly); the
+// fault's time on stderr and /arm/fault_events, and the first /arm/ row with the flag latched
+// (within one row after it); the stop on stderr, the dig's end and the progress line's last time,
+// and the last /arm/ and /scoop/ rows and snapshot (within one row before it).
+TEST(ArmDriverTest, StderrAndDatasetsShareOneClock) {
+  const std::string scene_path = kSourceDir + "/scenes/arm/nominal_snow.yaml";
+  const std::string bed = Bed(Scene("arm/nominal_snow.yaml"), "snow");
+  const std::string out = (TempDir() / "clock.h5").string();
+  const std::string err = (TempDir() / "clock.txt").string();
+  ASSERT_EQ(scoopsim_test::RunScoopsim(
+                "run " + scene_path + " -o " + out + " --stop-after 0.15 --threads 1 --set " +
+                    "bed.file=" + bed + " --set arm.derate.j_prox_pitch=0.05 --set " +
+                    "output.snapshot_every=1000",
+                err),
+            0);
+  const std::string text = scoopsim_test::ReadText(err);
+  const double dig_start = NumberAfter(text, "s simulated (t = ");
+  const double dig_end = NumberAfter(text.substr(text.find("s simulated (t = ")), " to ");
+  const double fault = NumberAfter(text, "fault JOINT_TORQUE_LIMIT at t = ");
+  const double stop = NumberAfter(text, "stopped at t = ");
+  // The progress line's last "t NOW/END s" (the line that reads 100% or where it stopped).
+  const size_t last_progress = text.rfind("dig ");
+  ASSERT_NE(last_progress, std::string::npos) << text;
+  const double progress = NumberAfter(text.substr(last_progress), "  t ");
+  ASSERT_TRUE(std::isfinite(dig_start) && std::isfinite(dig_end) && std::isfinite(fault) &&
+              std::isfinite(stop) && std::isfinite(progress))
+      << text;
+
+  const sim::SavedRun run(out);
+  const sim::Scene scene = Scene("arm/nominal_snow.yaml");
+  const double row = scene.dig.interval, printed4 = 5e-5, printed6 = 1e-6 * stop;
+  const double start_time = run.RootNumber("start_time", std::nan(""));
+  EXPECT_NEAR(dig_start, start_time, printed4);
+  EXPECT_NEAR(dig_end, stop, printed4);
+  EXPECT_NEAR(progress, stop, printed4);
+  EXPECT_GT(stop, start_time + 0.15 - printed6);
+
+  const sim::ArmSeries arm = run.Arm();
+  const sim::ScoopSeries scoop = run.Scoop();
+  ASSERT_FALSE(arm.empty());
+  ASSERT_FALSE(scoop.time.empty());
+  for (const std::vector<double>* t : {&arm.time, &scoop.time}) {
+    EXPECT_GE(t->front(), start_time);
+    EXPECT_LE(t->front(), start_time + row);
+    EXPECT_LE(t->back(), stop + printed6);
+    EXPECT_GE(t->back(), stop - row - printed6);
+  }
+  const std::vector<sim::SnapshotInfo> snapshots = run.Snapshots();
+  ASSERT_GE(snapshots.size(), 2u);
+  EXPECT_EQ(snapshots.front().time, start_time);
+  EXPECT_LE(snapshots.back().time, stop + printed6);
+
+  const std::vector<double> events = FirstColumn(out, "/arm/fault_events");
+  ASSERT_FALSE(events.empty());
+  EXPECT_NEAR(events.front(), fault, printed4);
+  size_t latched = 0;
+  while (latched < arm.time.size() && (arm.fault_latched[latched] & kJointTorqueLimit) == 0)
+    ++latched;
+  ASSERT_LT(latched, arm.time.size());
+  EXPECT_GE(arm.time[latched], fault - printed4);
+  EXPECT_LE(arm.time[latched], fault + row + printed4);
+  EXPECT_GT(fault, start_time + scene.arm.hold_time - printed4);  // one clock, not the dig's
+  std::printf(
+      "one clock: dig from t = %.4f s (start_time %.6f s); fault at t = %.4f s (stderr), %.6f s "
+      "(/arm/fault_events), first latched row %.6f s; stop at t = %.6g s, last /arm/ row %.6f s\n",
+      dig_start, start_time, fault, events.front(), arm.time[latched], stop, arm.time.back());
 }
 
 // A scene with the nominal scene's keys and `arm` as its arm: block.
