@@ -40,7 +40,8 @@ Mat4 Multiply(const Mat4& a, const Mat4& b);
 //   trench_oblique  from -x -y above: the default, scoop and trench in perspective
 //   top             from straight above (+z), x to the right
 //   arm             from -y, a little ahead (+x) and above, over the container and the whole arm
-//                   (its links and scoop at the sequence's first frame: the camera stays put)
+//                   (its links and scoop in every frame so far, a saved run's in all its
+//                   snapshots: the camera moves only when a link leaves what it frames)
 //   scoop           as trench_oblique, over a cube of 0.3 m around the scoop: follows it
 const std::vector<std::string>& CameraPresetNames();
 // False when `name` is not a preset (camera unchanged). Keeps width, height and fov_y_deg.

@@ -91,16 +91,19 @@ void FrameSequence::Add(const sim::WorldView& view) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   RenderSettings settings = options_.settings;
-  if (camera_fixed_) {
-    settings.camera = fixed_camera_;
-  } else if (!options_.camera_preset.empty()) {
+  if (!options_.camera_preset.empty()) {
     dem::Vec3 lo, hi;
     PresetBounds(options_.camera_preset, view, &lo, &hi);
-    ApplyCameraPreset(options_.camera_preset, lo, hi, &settings.camera);
-    // The arm's frame is set once: a camera that followed the links' extent would jitter.
     if (options_.camera_preset == "arm") {
-      fixed_camera_ = settings.camera;
-      camera_fixed_ = true;
+      // A camera that followed the links' extent would jitter: it frames the box of every frame
+      // so far (or the whole run's, FrameAtLeast) and moves only when a link leaves that box.
+      const bool inside = framed_ && lo.x >= framed_lo_.x && lo.y >= framed_lo_.y &&
+                          lo.z >= framed_lo_.z && hi.x <= framed_hi_.x && hi.y <= framed_hi_.y &&
+                          hi.z <= framed_hi_.z;
+      if (!inside) FrameAtLeast(lo, hi);
+      settings.camera = framed_camera_;
+    } else {
+      ApplyCameraPreset(options_.camera_preset, lo, hi, &settings.camera);
     }
   }
   const Image& image = renderer_->Render(view, settings);
@@ -110,6 +113,20 @@ void FrameSequence::Add(const sim::WorldView& view) {
   draw_seconds_ += std::chrono::duration<double>(t1 - t0).count();
   png_seconds_ += std::chrono::duration<double>(t2 - t1).count();
   ++count_;
+}
+
+void FrameSequence::FrameAtLeast(const dem::Vec3& lo, const dem::Vec3& hi) {
+  if (!framed_) {
+    framed_lo_ = lo;
+    framed_hi_ = hi;
+    framed_ = true;
+  }
+  framed_lo_ = {std::min(framed_lo_.x, lo.x), std::min(framed_lo_.y, lo.y),
+                std::min(framed_lo_.z, lo.z)};
+  framed_hi_ = {std::max(framed_hi_.x, hi.x), std::max(framed_hi_.y, hi.y),
+                std::max(framed_hi_.z, hi.z)};
+  framed_camera_ = options_.settings.camera;
+  ApplyCameraPreset("arm", framed_lo_, framed_hi_, &framed_camera_);
 }
 
 void FrameSequence::SetRange(double min, double max) {

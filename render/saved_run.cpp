@@ -53,6 +53,21 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
     frames->SetRange(range.min(), range.max());
   }
 
+  // The arm preset over the whole run: every snapshot's meshes and the box, so its camera stays.
+  if (frames->options().camera_preset == "arm" && scene.has_box) {
+    for (const sim::SnapshotInfo& snapshot : snapshots) {
+      const std::vector<sim::SnapshotMesh> stored = run.ReadSnapshotMeshes(snapshot);
+      sim::WorldView view;
+      view.box_min = scene.has_box ? scene.box_min : dem::Vec3{};
+      view.box_max = scene.has_box ? scene.box_max : dem::Vec3{};
+      for (const sim::SnapshotMesh& m : stored)
+        view.meshes.push_back({&m.mesh, dem::Pose{}, sim::MeshRole::kArmLink});
+      dem::Vec3 lo, hi;
+      PresetBounds("arm", view, &lo, &hi);
+      frames->FrameAtLeast(lo, hi);
+    }
+  }
+
   int written = 0;
   const bool tty = isatty(fileno(stderr)) != 0;
   for (const sim::SnapshotInfo& snapshot : snapshots) {
