@@ -11,13 +11,16 @@
 #
 # Environment: NRUNS (3), BIN (build/scoopsim), MACHINE (vm), SCENE (scenes/arm/table_snow.yaml;
 # e.g. a copy of an older version for an older BIN), COMMIT (the CSV's commit column: the
-# checkout's HEAD). The table is built once, when out/table_arm_bench/table.h5 is missing
+# checkout's HEAD), NO_SNAPSHOTS (default `--set output.snapshot_every=0`: the arm alone, as before
+# the scene wrote snapshots, which cost about a third of its wall time; empty for a BIN older than
+# --set). The table is built once, when out/table_arm_bench/table.h5 is missing
 # (scenes/sweeps/table_arm_bench.yaml, ~2 minutes).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 NRUNS=${NRUNS:-3}
 BIN=${BIN:-$ROOT/build/scoopsim}
 MACHINE=${MACHINE:-vm}
+NO_SNAPSHOTS=${NO_SNAPSHOTS---set output.snapshot_every=0}
 SCENE=${SCENE:-$ROOT/scenes/arm/table_snow.yaml}
 RESDIR="$ROOT/bench/results/$MACHINE"
 CSV="$RESDIR/table_arm_rtf.csv"
@@ -33,7 +36,7 @@ trap 'rm -rf "$work"' EXIT
 for run in $(seq 1 "$NRUNS"); do
   load1=$(cut -d' ' -f1 /proc/loadavg)
   /usr/bin/time -f "%U %S" -o "$work/time" "$BIN" run "$SCENE" -o "$work/out.h5" --threads 1 \
-    --quiet 2>"$work/log" || { cat "$work/log"; exit 1; }
+    --quiet $NO_SNAPSHOTS 2>"$work/log" || { cat "$work/log"; exit 1; }
   line=$(grep "table-driven arm:" "$work/log")
   echo "run $run (load $load1): ${line#scoopsim: }"
   /usr/bin/python3 - "$line" "$(cat "$work/time")" "$run" "$load1" "$commit" "$CSV" \

@@ -30,6 +30,10 @@ const Preset kPresets[] = {
     {"trench_side", {0, -1, 0.12}, {0, 0, 1}},
     {"trench_oblique", {-0.55, -1, 0.75}, {0, 0, 1}},
     {"top", {0, 0, 1}, {0, 1, 0}},
+    // Over the arm's whole length and the trench: from the side (-y), a little ahead and above.
+    {"arm", {0.3, -1, 0.35}, {0, 0, 1}},
+    // Close on the scoop, as trench_oblique looks at the box.
+    {"scoop", {-0.55, -1, 0.75}, {0, 0, 1}},
 };
 
 }  // namespace

@@ -33,11 +33,16 @@ void ClipPlanes(const Camera& camera, double* near_plane, double* far_plane);
 // Matrix product a * b.
 Mat4 Multiply(const Mat4& a, const Mat4& b);
 
-// Framing presets over a box (the bed container): each looks at the box from a set direction at
-// the distance where the whole box fits the field of view.
+// Framing presets over a box: each looks at the box from a set direction at the distance where
+// the whole box fits the field of view. The box is the bed container for the first three; the
+// caller gives the others theirs (render/frames.h, PresetBounds):
 //   trench_side     from -y, level with the top of the box: the trench in section
 //   trench_oblique  from -x -y above: the default, scoop and trench in perspective
 //   top             from straight above (+z), x to the right
+//   arm             from -y, a little ahead (+x) and above, over the container and the whole arm
+//                   (its links and scoop in every frame so far, a saved run's in all its
+//                   snapshots: the camera moves only when a link leaves what it frames)
+//   scoop           as trench_oblique, over a cube of 0.3 m around the scoop: follows it
 const std::vector<std::string>& CameraPresetNames();
 // False when `name` is not a preset (camera unchanged). Keeps width, height and fov_y_deg.
 bool ApplyCameraPreset(const std::string& name, const dem::Vec3& box_min, const dem::Vec3& box_max,

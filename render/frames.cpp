@@ -1,12 +1,47 @@
 #include "render/frames.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
 
+#include "dem/transform.h"
+
 namespace render {
+
+void PresetBounds(const std::string& preset, const sim::WorldView& view, dem::Vec3* lo,
+                  dem::Vec3* hi) {
+  *lo = view.box_min;
+  *hi = view.box_max;
+  auto grow = [&](const dem::Vec3& p) {
+    *lo = {std::min(lo->x, p.x), std::min(lo->y, p.y), std::min(lo->z, p.z)};
+    *hi = {std::max(hi->x, p.x), std::max(hi->y, p.y), std::max(hi->z, p.z)};
+  };
+  if (preset == "arm") {
+    for (const sim::MeshView& m : view.meshes)
+      for (const dem::Vec3& v : m.mesh->vertices) grow(dem::Apply(m.pose, v));
+  } else if (preset == "scoop") {
+    dem::Vec3 scoop_lo{1e300, 1e300, 1e300}, scoop_hi{-1e300, -1e300, -1e300};
+    for (const sim::MeshView& m : view.meshes) {
+      if (m.role != sim::MeshRole::kScoop) continue;
+      for (const dem::Vec3& v : m.mesh->vertices) {
+        const dem::Vec3 p = dem::Apply(m.pose, v);
+        scoop_lo = {std::min(scoop_lo.x, p.x), std::min(scoop_lo.y, p.y),
+                    std::min(scoop_lo.z, p.z)};
+        scoop_hi = {std::max(scoop_hi.x, p.x), std::max(scoop_hi.y, p.y),
+                    std::max(scoop_hi.z, p.z)};
+      }
+    }
+    if (scoop_lo.x <= scoop_hi.x) {
+      const dem::Vec3 centre = 0.5 * (scoop_lo + scoop_hi);
+      const dem::Vec3 half{0.5 * kScoopFrame, 0.5 * kScoopFrame, 0.5 * kScoopFrame};
+      *lo = centre - half;
+      *hi = centre + half;
+    }
+  }
+}
 
 FrameOptions FrameOptionsFromSpec(const sim::RenderSpec& spec) {
   FrameOptions options;
@@ -57,7 +92,19 @@ void FrameSequence::Add(const sim::WorldView& view) {
   const auto t0 = Clock::now();
   RenderSettings settings = options_.settings;
   if (!options_.camera_preset.empty()) {
-    ApplyCameraPreset(options_.camera_preset, view.box_min, view.box_max, &settings.camera);
+    dem::Vec3 lo, hi;
+    PresetBounds(options_.camera_preset, view, &lo, &hi);
+    if (options_.camera_preset == "arm") {
+      // A camera that followed the links' extent would jitter: it frames the box of every frame
+      // so far (or the whole run's, FrameAtLeast) and moves only when a link leaves that box.
+      const bool inside = framed_ && lo.x >= framed_lo_.x && lo.y >= framed_lo_.y &&
+                          lo.z >= framed_lo_.z && hi.x <= framed_hi_.x && hi.y <= framed_hi_.y &&
+                          hi.z <= framed_hi_.z;
+      if (!inside) FrameAtLeast(lo, hi);
+      settings.camera = framed_camera_;
+    } else {
+      ApplyCameraPreset(options_.camera_preset, lo, hi, &settings.camera);
+    }
   }
   const Image& image = renderer_->Render(view, settings);
   const auto t1 = Clock::now();
@@ -66,6 +113,20 @@ void FrameSequence::Add(const sim::WorldView& view) {
   draw_seconds_ += std::chrono::duration<double>(t1 - t0).count();
   png_seconds_ += std::chrono::duration<double>(t2 - t1).count();
   ++count_;
+}
+
+void FrameSequence::FrameAtLeast(const dem::Vec3& lo, const dem::Vec3& hi) {
+  if (!framed_) {
+    framed_lo_ = lo;
+    framed_hi_ = hi;
+    framed_ = true;
+  }
+  framed_lo_ = {std::min(framed_lo_.x, lo.x), std::min(framed_lo_.y, lo.y),
+                std::min(framed_lo_.z, lo.z)};
+  framed_hi_ = {std::max(framed_hi_.x, hi.x), std::max(framed_hi_.y, hi.y),
+                std::max(framed_hi_.z, hi.z)};
+  framed_camera_ = options_.settings.camera;
+  ApplyCameraPreset("arm", framed_lo_, framed_hi_, &framed_camera_);
 }
 
 void FrameSequence::SetRange(double min, double max) {

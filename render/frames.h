@@ -25,6 +25,14 @@ struct FrameOptions {
   int threads = 0;            // LP_NUM_THREADS when unset (0 = llvmpipe's default)
 };
 
+// The box a camera preset frames in `view` (render/camera.h): the bed container (trench_side,
+// trench_oblique, top); it and every mesh of the view, the arm's links and scoop included (arm;
+// FrameSequence keeps the union over the frames);
+// a cube of side kScoopFrame centred on the scoop's mesh (scoop; the container without a scoop).
+constexpr double kScoopFrame = 0.3;  // [m]
+void PresetBounds(const std::string& preset, const sim::WorldView& view, dem::Vec3* lo,
+                  dem::Vec3* hi);
+
 // Frame options from a scene's `render:` block (camera, colour field, size). Throws
 // sim::InputError for a colour field or preset this build does not know.
 FrameOptions FrameOptionsFromSpec(const sim::RenderSpec& spec);
@@ -41,6 +49,9 @@ class FrameSequence {
   void Add(const sim::WorldView& view);
   // Sets the colour range of the sequence; std::logic_error once a frame was written.
   void SetRange(double min, double max);
+  // The arm preset frames at least this box in every frame (a saved run's union over all its
+  // snapshots, so the camera never moves); without it, the box of the frames so far.
+  void FrameAtLeast(const dem::Vec3& lo, const dem::Vec3& hi);
 
   int count() const { return count_; }
   const std::string& dir() const { return options_.dir; }
@@ -52,6 +63,9 @@ class FrameSequence {
 
  private:
   FrameOptions options_;
+  bool framed_ = false;  // the arm preset's box so far: the camera moves only to grow it
+  dem::Vec3 framed_lo_, framed_hi_;
+  Camera framed_camera_;
   std::unique_ptr<Renderer> renderer_;
   int count_ = 0;
   double draw_seconds_ = 0, png_seconds_ = 0;

@@ -141,6 +141,21 @@ void Image::FillRect(int x, int y, int w, int h, Rgba8 c) {
   }
 }
 
+void Image::BlendRect(int x, int y, int w, int h, Rgba8 c) {
+  const int x0 = std::max(x, 0), x1 = std::min(x + w, width_);
+  const int y0 = std::max(y, 0), y1 = std::min(y + h, height_);
+  const int a = c.a;
+  auto mix = [a](uint8_t under, uint8_t over) {
+    return static_cast<uint8_t>((over * a + under * (255 - a) + 127) / 255);
+  };
+  for (int yy = y0; yy < y1; ++yy) {
+    for (int xx = x0; xx < x1; ++xx) {
+      const Rgba8 u = At(xx, yy);
+      Set(xx, yy, {mix(u.r, c.r), mix(u.g, c.g), mix(u.b, c.b), 255});
+    }
+  }
+}
+
 int TextWidth(const std::string& text, int scale) {
   return static_cast<int>(text.size()) * kGlyphAdvance * scale;
 }

@@ -23,6 +23,8 @@ class Image {
   Rgba8 At(int x, int y) const;
   void Set(int x, int y, Rgba8 c);                     // ignores pixels outside the image
   void FillRect(int x, int y, int w, int h, Rgba8 c);  // clipped to the image
+  // The same, blended over what is there by c.a / 255 (a text's backing plate).
+  void BlendRect(int x, int y, int w, int h, Rgba8 c);
   // Storage: rows bottom-up (OpenGL order), 4 bytes a pixel, no padding (width * height * 4).
   uint8_t* data() { return pixels_.data(); }
   const uint8_t* data() const { return pixels_.data(); }

@@ -534,9 +534,15 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
   if (settings.overlays) {
     const Rgba8 ink{25, 27, 32, 255};
     const int s = camera.height >= 480 ? 2 : 1;  // font scale
-    DrawText(&m.image, 12 * s, 10 * s, Caption(view), s, ink);
-    if (!view.faults.empty())
-      DrawText(&m.image, 12 * s, 10 * s + kGlyphHeight * s, "FAULT " + view.faults, s, kMarginOver);
+    // The caption and the fault line on a light plate: readable over the orange links.
+    const std::string caption = Caption(view);
+    const std::string fault = view.faults.empty() ? "" : "FAULT " + view.faults;
+    const int lines = fault.empty() ? 1 : 2;
+    m.image.BlendRect(8 * s, 7 * s, std::max(TextWidth(caption, s), TextWidth(fault, s)) + 8 * s,
+                      lines * kGlyphHeight * s + 4 * s, kPlate);
+    DrawText(&m.image, 12 * s, 10 * s, caption, s, ink);
+    if (!fault.empty())
+      DrawText(&m.image, 12 * s, 10 * s + kGlyphHeight * s, fault, s, kMarginOver);
     DrawTorqueBars(&m.image, view.joints, s, ink);
     if (n > 0) {
       // Colour bar at the right edge: the title above, the range's ends beside it.
@@ -574,7 +580,7 @@ const Image& Renderer::Render(const sim::WorldView& view, const RenderSettings& 
 }
 
 std::string Caption(const sim::WorldView& view) {
-  std::string text = "t = " + Format("%.5f", view.time - view.clock_start) + " s";
+  std::string text = "t = " + Format("%.5f", view.time) + " s";
   if (view.pass > 0) {
     text += "   pass " + std::to_string(view.pass) + "   rho = " + Format("%.4f", view.rho) + " m";
   }
@@ -608,7 +614,11 @@ void DrawTorqueBars(Image* image, const std::vector<sim::JointView>& joints, int
   const int track_w = 100 * s, bar_h = 7 * s, row_h = kGlyphHeight * s + 2 * s;
   const int x = 12 * s, bar_x = x + label_w + 6 * s;
   int y = image->height() - 10 * s - static_cast<int>(joints.size()) * row_h;
-  DrawText(image, x, y - row_h, "|torque| / effort limit", s, ink);
+  const std::string title = "|torque| / effort limit";
+  image->BlendRect(x - 4 * s, y - row_h - 3 * s,
+                   std::max(TextWidth(title, s), bar_x - x + track_w + s) + 8 * s,
+                   static_cast<int>(joints.size() + 1) * row_h + 4 * s, kPlate);
+  DrawText(image, x, y - row_h, title, s, ink);
   for (const sim::JointView& j : joints) {
     DrawText(image, x, y, j.name, s, ink);
     const int bar_y = y + (kGlyphHeight * s - bar_h) / 2 - s;

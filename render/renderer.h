@@ -76,8 +76,8 @@ class Renderer {
   std::unique_ptr<Impl> impl_;
 };
 
-// Caption text for a view: "t = 0.01234 s" on the view's clock (time - clock_start: from the
-// dig's start, not the pour's), plus pass and rho when the view has a dig (pass > 0) and |F| when
+// Caption text for a view: "t = 0.01234 s" on the run's one clock (README "One clock"), plus
+// pass and rho when the view has a dig (pass > 0) and |F| when
 // it has a dig or a force.
 std::string Caption(const sim::WorldView& view);
 
@@ -88,6 +88,8 @@ std::string Caption(const sim::WorldView& view);
 // 0 < m <= kMarginLow, kMarginOver (red) for m <= 0 (at or over the limit: the joint saturates).
 // Latched fault flags (view.faults) are written in red under the caption.
 constexpr double kMarginLow = 0.25;
+// The light plate behind the caption, the fault line and the torque bars (85% opaque).
+constexpr Rgba8 kPlate{250, 250, 248, 217};
 constexpr Rgba8 kMarginOk{46, 160, 67, 255};
 constexpr Rgba8 kMarginWarn{235, 160, 20, 255};
 constexpr Rgba8 kMarginOver{214, 39, 40, 255};

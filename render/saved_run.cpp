@@ -36,7 +36,6 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
   }
 
   const sim::ArmSeries arm = run.Arm();
-  const double clock_start = run.RootNumber("start_time", 0.0);
 
   dem::Particles particles;
   // One colour range for the whole sequence: from every snapshot's field, unless given.
@@ -54,6 +53,21 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
     frames->SetRange(range.min(), range.max());
   }
 
+  // The arm preset over the whole run: every snapshot's meshes and the box, so its camera stays.
+  if (frames->options().camera_preset == "arm" && scene.has_box) {
+    for (const sim::SnapshotInfo& snapshot : snapshots) {
+      const std::vector<sim::SnapshotMesh> stored = run.ReadSnapshotMeshes(snapshot);
+      sim::WorldView view;
+      view.box_min = scene.has_box ? scene.box_min : dem::Vec3{};
+      view.box_max = scene.has_box ? scene.box_max : dem::Vec3{};
+      for (const sim::SnapshotMesh& m : stored)
+        view.meshes.push_back({&m.mesh, dem::Pose{}, sim::MeshRole::kArmLink});
+      dem::Vec3 lo, hi;
+      PresetBounds("arm", view, &lo, &hi);
+      frames->FrameAtLeast(lo, hi);
+    }
+  }
+
   int written = 0;
   const bool tty = isatty(fileno(stderr)) != 0;
   for (const sim::SnapshotInfo& snapshot : snapshots) {
@@ -62,7 +76,6 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
 
     sim::WorldView view;
     view.time = snapshot.time;
-    view.clock_start = clock_start;
     view.particles = &particles;
     if (scene.has_gravity) view.gravity = scene.gravity;
     if (scene.has_box) {
@@ -98,8 +111,9 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
       if (stored.empty() && !scoop_mesh.triangles.empty())
         view.meshes.push_back({&scoop_mesh, scoop.pose[k]});
     }
-    // The arm's torque bars and fault flags at the last /arm/ sample at or before it.
-    const int a = arm.empty() ? -1 : sim::SampleAt(arm.time, snapshot.time);
+    // The arm's torque bars and fault flags at the last /arm/ sample at or before it (the first
+    // sample for a snapshot before it: the dig's first, taken before the first step).
+    const int a = arm.empty() ? -1 : std::max(sim::SampleAt(arm.time, snapshot.time), 0);
     if (a >= 0) {
       const size_t n = arm.joints.size();
       for (size_t j = 0; j < n; ++j)

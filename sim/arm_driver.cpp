@@ -490,6 +490,11 @@ PassStart ArmDriver::BeginPass(int pass, const BedContext& bed) {
   a.bullet->SetJointState(plan.q[0]);
   const Eigen::Vector3d g_base = a.base.linear().transpose() * ToEigen(a.gravity);
   a.pid->Preload(arm::GravityTorques(a.model, plan.q[0], g_base));
+  // What the PID demands at rest there (its integral), shown before the first Bullet step (a
+  // frame at the dig's start draws these torque bars); every step overwrites it.
+  a.demanded = arm::GravityTorques(a.model, plan.q[0], g_base);
+  for (int i = 0; i < a.n; ++i)
+    a.applied[i] = std::clamp(a.demanded[i], -a.model.joints[i].effort, a.model.joints[i].effort);
   a.plan = &plan;
   a.seg = 0;
   a.mode = Impl::Mode::kFollow;

@@ -891,7 +891,13 @@ H5Output::H5Output(const std::string& path, const std::string& scene_yaml,
     if (m.lock_fd < 0 || !LockFile(m.lock_fd))
       throw InputError(temporary + ": cannot lock the new output file");
     m.old_lock_fd = PutInPlace(temporary, path);
-    if (!m.snapshots.empty()) h5::WriteXdmf(m.path, m.snapshots);
+    if (!m.snapshots.empty()) {
+      h5::WriteXdmf(m.path, m.snapshots);
+    } else {
+      // An earlier run's sidecar would name snapshots this file does not have.
+      std::error_code ignored;
+      std::filesystem::remove(h5::XdmfPath(m.path), ignored);
+    }
   } catch (...) {
     m.root.reset();
     m.file.reset();

@@ -16,7 +16,11 @@
 //                           (P x 7: each part's body -> world, x y z qw qx qy qz)
 //                           (sim/internal_h5.h, WriteSnapshotMeshes)
 //   <name>.xdmf             next to <name>.h5: XDMF3 temporal collection of the snapshots
-//                           ("particles", Polyvertex), and one of Triangle grids per mesh name
+//                           ("particles", Polyvertex), and one of Triangle grids per mesh name;
+//                           written only when the file has snapshots
+// Every time in the file (rows, snapshots, the XDMF) is on the run's one clock, the DEM state's
+// (t = 0 at the start of the pour); a run's root attribute start_time is when its dig (or plain
+// run) began on it (README "One clock").
 //
 // Crash safety (ARCHITECTURE.md "Crash-safe output"): the file is written in HDF5's
 // single-writer/multiple-reader (SWMR) mode, whose ordered metadata writes keep every prefix of

@@ -117,8 +117,9 @@ void Progress::Update(double sim_time, int64_t particle_steps) {
   eta_ = std::isfinite(recent) ? 0.5 * (recent + overall) : overall;
   const double fraction =
       total_time_ > 0 ? std::min(1.0, std::max(0.0, sim_time / total_time_)) : 0.0;
-  const std::string line = Line(label_, fraction, total_time_, sim_time, particle_steps - steps0_,
-                                elapsed, eta_, open_ended_);
+  const std::string line =
+      Line(label_, fraction, clock_start_ + total_time_, clock_start_ + sim_time,
+           particle_steps - steps0_, elapsed, eta_, open_ended_);
   if (tty_) {
     std::fprintf(stderr, "\r%s\x1b[K", line.c_str());  // ESC[K clears the rest of the old line
     g_live_line = true;
@@ -135,8 +136,9 @@ void Progress::Finish(double sim_time, int64_t particle_steps, bool done) {
   const double fraction = done              ? 1.0
                           : total_time_ > 0 ? std::min(1.0, std::max(0.0, sim_time / total_time_))
                                             : 0.0;
-  const std::string line = Line(label_, fraction, total_time_, sim_time, particle_steps - steps0_,
-                                now - start_, done ? 0.0 : std::nan(""));
+  const std::string line =
+      Line(label_, fraction, clock_start_ + total_time_, clock_start_ + sim_time,
+           particle_steps - steps0_, now - start_, done ? 0.0 : std::nan(""));
   std::fprintf(stderr, tty_ ? "\r%s\x1b[K\n" : "%s\n", line.c_str());
   g_live_line = false;
   std::fflush(stderr);

@@ -39,6 +39,9 @@ class Progress {
   // The run may end before total_time (a pour ends once the bed has settled): the ETA is then
   // an upper bound and shown as "ETA <= m:ss".
   void set_open_ended(bool open_ended) { open_ended_ = open_ended; }
+  // The times given count from `clock_start` on the run's clock (a dig's from its start): the
+  // line shows them on the run's clock, "t 0.41/1.41 s" (README "One clock").
+  void set_clock_start(double clock_start) { clock_start_ = clock_start; }
 
   // Estimated wall seconds left at the last Update (NaN when unknown), for tests and logs.
   double eta() const { return eta_; }
@@ -55,6 +58,7 @@ class Progress {
   bool printed_ = false;
   bool open_ended_ = false;
   double eta_;
+  double clock_start_ = 0;       // the run's clock at sim_time 0 [s]
   double sim0_ = 0;              // simulated time at Begin [s]
   int64_t steps0_ = 0;           // particle-steps at Begin
   std::vector<Sample> samples_;  // (elapsed, sim_time) about every 0.1 s, for the recent rate

@@ -118,6 +118,17 @@ YAML::Node Parse(const std::string& file, const std::string& text) {
   return yaml_input::ParseDocument(file, text);
 }
 
+// A scene's document with the command line's overrides its text holds (`--set`) written in.
+YAML::Node ParseScene(const std::string& file, const std::string& text) {
+  YAML::Node root = Parse(file, text);
+  yaml_input::ApplySets(&root, yaml_input::SetsOf(text));
+  return root;
+}
+
+// The scene of a text with its overrides, checked (LoadSceneText names the override an error is
+// about).
+Scene ReadScene(const std::string& path, const std::string& yaml_text);
+
 // A YAML map being read: rejects unknown keys up front and gives typed, range-checked values
 // addressed by their dotted path.
 class MapReader {
@@ -1112,8 +1123,8 @@ InputError::InputError(std::string file, int line, std::string key, std::string 
 int SceneLine(const Scene& scene, const std::string& key) {
   YAML::Node node;
   try {
-    node = YAML::Load(scene.yaml_text);
-  } catch (const YAML::Exception&) {
+    node = ParseScene(scene.path, scene.yaml_text);
+  } catch (const std::exception&) {
     return 1;
   }
   int line = 1;
@@ -1153,18 +1164,34 @@ void LoadMaterials(const std::string& path, dem::MaterialTable* table) {
   ParseMaterials(path, Parse(path, text), table);
 }
 
-Scene LoadScene(const std::string& path) {
+Scene LoadScene(const std::string& path, const std::vector<std::string>& sets) {
   std::string text;
   if (!ReadFile(path, &text)) throw InputError(path + ": cannot open scene file");
-  return LoadSceneText(path, text);
+  return LoadSceneText(path, yaml_input::TextWithSets(text, sets));
+}
+
+InputError NamingSet(const InputError& error, const std::vector<std::string>& sets) {
+  const std::string set = yaml_input::SetAt(error.line(), sets);
+  if (set.empty()) return error;
+  return InputError("--set " + set, 0, error.key(), error.expected(), error.got(), error.note());
 }
 
 Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
   yaml_input::TakeWarnings();  // none left from a load that failed
+  try {
+    return ReadScene(path, yaml_text);
+  } catch (const InputError& e) {
+    throw NamingSet(e, yaml_input::SetsOf(yaml_text));
+  }
+}
+
+namespace {
+
+Scene ReadScene(const std::string& path, const std::string& yaml_text) {
   Scene scene;
   scene.path = path;
   scene.yaml_text = yaml_text;
-  const YAML::Node root = Parse(path, scene.yaml_text);
+  const YAML::Node root = ParseScene(path, scene.yaml_text);
   if (root.IsNull()) Fail(path, 1, "(top level)", "a map of scene keys", "an empty file");
   const MapReader top(path, root, "",
                       {"materials", "gravity", "time_step", "neighbor", "box", "bed", "duration",
@@ -1424,9 +1451,11 @@ Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
   return scene;
 }
 
+}  // namespace
+
 StoredScene ParseStoredScene(const std::string& yaml_text, const std::string& name) {
   StoredScene stored;
-  const YAML::Node root = Parse(name, yaml_text);
+  const YAML::Node root = ParseScene(name, yaml_text);
   if (!root.IsMap()) return stored;
   // Only the keys read here are checked (as LoadScene checks them); the others describe the run,
   // not the world a reader of its file rebuilds, and may come from another version.

@@ -126,7 +126,8 @@ struct RenderSpec {
 };
 // Camera presets a scene may name (render/camera.cpp frames each; a render test checks both
 // lists agree).
-inline const char* const kRenderCameraPresets[] = {"trench_side", "trench_oblique", "top"};
+inline const char* const kRenderCameraPresets[] = {"trench_side", "trench_oblique", "top", "arm",
+                                                   "scoop"};
 
 // A fixed rigid sphere in the bed (key `obstacles:`, a buried boulder). The particles meet it as
 // a fixed triangle mesh (World::StartDig takes out the particles it overlaps); a scoop held by the
@@ -221,10 +222,18 @@ struct Scene {
 };
 
 // Loads and validates a scene. Throws InputError with one line naming file, line, key, expectation.
-Scene LoadScene(const std::string& path);
+// `sets`: the command line's `--set KEY=VALUE` overrides, written into the scene before it is
+// checked (and kept in its yaml_text as `# scoopsim --set KEY=VALUE` lines at the end, so the text
+// stored with a run holds them); an error about an overridden key names `--set KEY=VALUE` for the
+// file and line.
+Scene LoadScene(const std::string& path, const std::vector<std::string>& sets = {});
 // The same for a scene text that is not (or not yet) a file, such as a sweep's case: `path`
-// names it in messages and files named in it are relative to its folder.
+// names it in messages and files named in it are relative to its folder. Applies the overrides
+// the text holds.
 Scene LoadSceneText(const std::string& path, const std::string& yaml_text);
+// `error` reworded to name the override it is about (`--set KEY=VALUE: KEY: expected ...`) when
+// its line is one of `sets`' (an error found after LoadScene, sim/preflight.h); else `error`.
+InputError NamingSet(const InputError& error, const std::vector<std::string>& sets);
 
 // The 1-based line of the dotted key `key` ("bed.radius", "dig.scoop.scale") in the scene's text,
 // or of its nearest parent there; 1 when none. For errors found after LoadScene (sim/preflight.h).

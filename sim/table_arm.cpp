@@ -141,9 +141,23 @@ TableArmResult RunTableArm(const Scene& scene, const RunOptions& options) {
   TableArmResult result;
   const auto wall0 = std::chrono::steady_clock::now();
   double time = 0;  // simulated time at the start of the current pass [s]
-  for (int pass = 1; pass <= scene.dig.passes && result.exit_status == kExitOk; ++pass) {
+  // Snapshots every output.snapshot_every arm steps and at the start: no particles, the scoop and
+  // the arm's links (a replay by `scoopsim render`, the XDMF in ParaView).
+  const int64_t snapshot_every = out ? scene.output.snapshot_every : 0;
+  dem::Particles no_particles;
+  int64_t arm_steps = 0;
+  auto snapshot = [&](double t, const dem::Pose& scoop) {
+    WorldView view;
+    view.meshes.push_back({&scene.dig.scoop.geometry, scoop, MeshRole::kScoop});
+    driver.AddToView(&view);
+    out->WriteSnapshot(t, no_particles, view.meshes);
+  };
+  bool stopped_after = false;
+  for (int pass = 1; pass <= scene.dig.passes && result.exit_status == kExitOk && !stopped_after;
+       ++pass) {
     driver.BeginPass(pass, bed);
     source.BeginPass(pass);
+    if (snapshot_every > 0 && pass == 1) snapshot(0.0, driver.MotionAt(0.0).pose);
     double next_row = 0;
     int64_t k = 0;
     double tau = 0;
@@ -153,6 +167,7 @@ TableArmResult RunTableArm(const Scene& scene, const RunOptions& options) {
       driver.Feedback(next, source.At(m.pose));
       tau = next;
       ++k;
+      if (snapshot_every > 0 && ++arm_steps % snapshot_every == 0) snapshot(time + tau, m.pose);
       if (out && tau >= next_row) {
         next_row += scene.dig.interval;
         const double t = time + tau, p = pass, rho = source.rho();
@@ -166,6 +181,11 @@ TableArmResult RunTableArm(const Scene& scene, const RunOptions& options) {
         Row3(out.get(), "/scoop/torque_scoop", source.scoop_wrench().data() + 3);
         driver.Record(out.get(), t);
         out->MaybeFlush();
+      }
+      if (options.stop_after > 0 && time + tau >= options.stop_after) {
+        Status("scoopsim: stopped at t = %.6g s (--stop-after); output closed\n", time + tau);
+        stopped_after = true;
+        break;
       }
       if ((k & 1023) == 0 && StopRequested()) {
         Status("scoopsim: stopped by signal %d at t = %.6g s; output closed\n", StopSignal(),
@@ -191,7 +211,11 @@ TableArmResult RunTableArm(const Scene& scene, const RunOptions& options) {
     out->SetAttribute("real_time_factor", result.RealTimeFactor());
     out->SetAttribute("time", result.simulated);
     out->Close();
-    Status("scoopsim: wrote %s\n", out->path().c_str());
+    if (out->snapshot_count() > 0) {
+      Status("scoopsim: wrote %s (ParaView: %s)\n", out->path().c_str(), out->xdmf_path().c_str());
+    } else {
+      Status("scoopsim: wrote %s\n", out->path().c_str());
+    }
   }
   return result;
 }

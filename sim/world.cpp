@@ -312,6 +312,10 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver, const DigResume* resum
   started_ = true;
   dig.pass = first_pass;
   if (!Done()) BeginPass();
+  // A snapshot at the dig's start (the scoop placed, the arm at its first pose), as a plain run
+  // has one at its start: a replay's first frame. (A resumed dig has it already.)
+  if (out_ && resume == nullptr && scene_.output.snapshot_every > 0)
+    out_->WriteSnapshot(system_->time(), system_->particles(), View().meshes);
 }
 
 DigResume World::ResumePoint() const { return {dig_->pass, dig_->bed.surface, dig_->bed.clear_z}; }
@@ -536,7 +540,6 @@ void World::Record() {
 WorldView World::View() const {
   WorldView view;
   view.time = system_->time();
-  view.clock_start = t_start_;
   view.particles = &system_->particles();
   view.box_min = scene_.box_min;
   view.box_max = scene_.box_max;
@@ -579,6 +582,7 @@ RunResult World::Run(const RunControl& control) {
   dem::System& system = *system_;
   if (!dig_ && !started_) StartPlain();
   Progress progress(dig_ ? "dig" : "run", PlannedDuration(), control.quiet);
+  progress.set_clock_start(t_start_);  // one clock: the state's (README "One clock")
   progress.Begin(system.time() - t_start_, particle_steps_);  // a resumed run: from its checkpoint
   const auto wall0 = std::chrono::steady_clock::now();
   const dem::PhaseTimes phases0 = system.phase_times();
@@ -694,12 +698,12 @@ RunResult World::Run(const RunControl& control) {
     summary_.steps = system.step_count() - step0_;
     summary_.simulated = system.time() - t_start_;
     Status(
-        "scoopsim: dig: %lld particles, %lld steps, %.4g s simulated; peak |F| %.4g N, mean "
-        "|F| %.4g N (after first contact), peak |T| %.4g N m; %lld neighbour builds, %.3g "
-        "awake particle-steps per step\n",
+        "scoopsim: dig: %lld particles, %lld steps, %.4g s simulated (t = %.4f to %.4f s); "
+        "peak |F| %.4g N, mean |F| %.4g N (after first contact), peak |T| %.4g N m; %lld "
+        "neighbour builds, %.3g awake particle-steps per step\n",
         static_cast<long long>(summary_.particles), static_cast<long long>(summary_.steps),
-        summary_.simulated, summary_.peak_force, summary_.mean_force, summary_.peak_torque,
-        static_cast<long long>(system.neighbor_stats().builds),
+        summary_.simulated, t_start_, system.time(), summary_.peak_force, summary_.mean_force,
+        summary_.peak_torque, static_cast<long long>(system.neighbor_stats().builds),
         static_cast<double>(particle_steps_) / std::max<int64_t>(1, summary_.steps));
     Status("scoopsim: dig: %.1f s wall (%.3g x real time): %s\n", result.wall,
            summary_.simulated / std::max(result.wall, 1e-9),
@@ -725,9 +729,13 @@ RunResult World::Run(const RunControl& control) {
       }
       const bool failed = owned_out_->failed();
       owned_out_->Close();
-      if (!failed) {
+      // The XDMF sidecar exists only with snapshots: a run names no file it did not write.
+      if (!failed && owned_out_->snapshot_count() > 0) {
         Status("scoopsim: wrote %s (ParaView: %s)\n", owned_out_->path().c_str(),
                owned_out_->xdmf_path().c_str());
+      } else if (!failed) {
+        Status("scoopsim: wrote %s (no snapshots: output.snapshot_every is 0)\n",
+               owned_out_->path().c_str());
       }
     } catch (const std::exception& e) {
       if (result.exit_status != kExitFailure) Status("scoopsim: output failed: %s\n", e.what());

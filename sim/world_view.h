@@ -43,13 +43,11 @@ struct JointView {
 };
 
 struct WorldView {
-  double time = 0;         // simulated time [s]
-  double clock_start = 0;  // the caption's clock reads time - clock_start: the dig's (or the
-                           // run's) start, not the pour's [s]
-  int pass = 0;            // dig pass (1-based); 0 when the scene has no dig
-  double rho = 0;          // distance along the trench since first contact [m]
-  double force = 0;        // |F| on the scoop [N]
-  double torque = 0;       // |T| on the scoop about its CoM [N m]
+  double time = 0;    // simulated time, on the run's one clock (README "One clock") [s]
+  int pass = 0;       // dig pass (1-based); 0 when the scene has no dig
+  double rho = 0;     // distance along the trench since first contact [m]
+  double force = 0;   // |F| on the scoop [N]
+  double torque = 0;  // |T| on the scoop about its CoM [N m]
   const dem::Particles* particles = nullptr;
   std::vector<MeshView> meshes;
   std::vector<JointView> joints;  // the arm's joints, base to tip; empty without an arm

@@ -1,5 +1,6 @@
 #include "sim/yaml_input.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -90,6 +91,114 @@ std::vector<std::string> TakeWarnings() {
   std::vector<std::string> out;
   out.swap(warnings);
   return out;
+}
+
+namespace {
+
+[[noreturn]] void BadSet(const std::string& set, const std::string& expected) {
+  throw InputError("--set", 0, "", expected, "'" + set + "'");
+}
+
+// `text` parsed so that its nodes carry `line` (1-based).
+YAML::Node ParseAtLine(const std::string& text, int line) {
+  return YAML::Load(std::string(static_cast<size_t>(line - 1), '\n') + text);
+}
+
+}  // namespace
+
+std::string TextWithSets(const std::string& text, const std::vector<std::string>& sets) {
+  std::string out = text;
+  for (const std::string& set : sets) {
+    if (set.find_first_of("\r\n") != std::string::npos) BadSet(set, "KEY=VALUE on one line");
+    if (!out.empty() && out.back() != '\n') out += '\n';
+    out += kSetComment + set + '\n';
+  }
+  return out;
+}
+
+std::vector<std::string> SetsOf(const std::string& text) {
+  std::vector<std::string> sets;
+  const std::string marker = std::string("\n") + kSetComment;
+  for (size_t at = text.find(marker); at != std::string::npos; at = text.find(marker, at + 1)) {
+    const size_t begin = at + marker.size();
+    const size_t end = std::min(text.find('\n', begin), text.size());
+    sets.push_back(text.substr(begin, end - begin));
+  }
+  return sets;
+}
+
+void ApplySets(YAML::Node* root, const std::vector<std::string>& sets) {
+  for (size_t i = 0; i < sets.size(); ++i) {
+    const std::string& set = sets[i];
+    const int line = kSetLine + static_cast<int>(i);
+    const std::string expected = "KEY=VALUE with KEY a dotted scene key (dig.bite_depth)";
+    const size_t eq = set.find('=');
+    if (eq == std::string::npos || eq == 0) BadSet(set, expected);
+    std::vector<std::string> keys;
+    for (size_t begin = 0; begin <= eq;) {
+      const size_t dot = std::min(set.find('.', begin), eq);
+      const std::string key = set.substr(begin, dot - begin);
+      if (key.empty()) BadSet(set, expected);
+      for (char c : key)
+        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-')
+          BadSet(set, expected);
+      keys.push_back(key);
+      begin = dot + 1;
+    }
+    YAML::Node value;
+    try {
+      value = ParseAtLine(set.substr(eq + 1), line);
+    } catch (const YAML::Exception& e) {
+      throw InputError("--set " + set, 0, set.substr(0, eq), "a YAML value",
+                       "a syntax error: " + e.msg);
+    }
+    if (!root->IsMap() && !root->IsNull()) BadSet(set, "a scene whose top level is a map");
+    if (root->IsNull()) *root = ParseAtLine("{}", line);
+    // Down the path: a list index into a list, else a map key (a map made where it is missing).
+    YAML::Node node = *root;
+    for (size_t k = 0; k < keys.size(); ++k) {
+      const std::string& key = keys[k];
+      const bool last = k + 1 == keys.size();
+      if (node.IsSequence()) {
+        const bool digits = key.find_first_not_of("0123456789") == std::string::npos;
+        const size_t index = digits && key.size() < 9 ? std::stoul(key) : node.size();
+        if (index >= node.size()) {
+          BadSet(set, "an index below " + std::to_string(node.size()) + " at '" + key + "'");
+        }
+        if (last) {
+          node[index] = value;
+        } else {
+          node.reset(node[index]);
+        }
+        continue;
+      }
+      if (!node.IsMap()) BadSet(set, "a map or a list above '" + key + "'");
+      // (A lookup on a const node: a non-const one would insert the key, undefined.)
+      const YAML::Node found = static_cast<const YAML::Node&>(node)[key];
+      const bool present = found.IsDefined();
+      if (last) {
+        if (present) {
+          node[key] = value;
+        } else {
+          node[ParseAtLine(key, line)] = value;
+        }
+      } else {
+        if (!present || !(found.IsMap() || found.IsSequence())) {
+          if (present) {
+            node[key] = ParseAtLine("{}", line);
+          } else {
+            node[ParseAtLine(key, line)] = ParseAtLine("{}", line);
+          }
+        }
+        node.reset(node[key]);
+      }
+    }
+  }
+}
+
+std::string SetAt(int line, const std::vector<std::string>& sets) {
+  const int i = line - kSetLine;
+  return i >= 0 && i < static_cast<int>(sets.size()) ? sets[i] : std::string();
 }
 
 }  // namespace sim::yaml_input

@@ -36,4 +36,25 @@ bool LooksLikeRadians(double v);
 void Warn(const std::string& line);
 std::vector<std::string> TakeWarnings();
 
+// Scene keys set from the command line (`--set KEY=VALUE`, repeatable). They travel with the
+// scene's text as trailing comment lines `# scoopsim --set KEY=VALUE` (so the text stored in an
+// output, a checkpoint or a kept bed holds them, and whatever parses that text again sees the same
+// scene); ApplySets writes them into the parsed document before anything is checked. The nodes an
+// override makes carry the line kSetLine + i (i: its 0-based index), far past any scene's end, so
+// an error about them can be told apart and reworded by NameSet; the other keys keep their lines.
+constexpr int kSetLine = 100000;
+inline constexpr const char* kSetComment = "# scoopsim --set ";
+
+// `text` with the overrides appended as comment lines (a KEY=VALUE holding a line break is an
+// InputError naming --set).
+std::string TextWithSets(const std::string& text, const std::vector<std::string>& sets);
+// The overrides a text holds, in order.
+std::vector<std::string> SetsOf(const std::string& text);
+// Writes each override into `root` (a map, or null for an empty document): KEY is a dotted path of
+// map keys (or list indices), created when missing; VALUE is parsed as YAML. A malformed KEY=VALUE
+// is an InputError naming --set.
+void ApplySets(YAML::Node* root, const std::vector<std::string>& sets);
+// The override a line from ApplySets belongs to ("" for a line of the file itself).
+std::string SetAt(int line, const std::vector<std::string>& sets);
+
 }  // namespace sim::yaml_input

@@ -89,6 +89,17 @@ std::string OneLine(const std::string& message) {
   return out;
 }
 
+// --set KEY=VALUE (repeatable): a scene key overridden from the command line, checked as the
+// scene is (sim::LoadScene).
+void AddSetOption(CLI::App* command, std::vector<std::string>* sets) {
+  command
+      ->add_option("--set", *sets,
+                   "KEY=VALUE: override a scene key (dotted, e.g. dig.bite_depth=0.01; VALUE is "
+                   "YAML); repeatable")
+      ->take_all()
+      ->allow_extra_args(false);
+}
+
 // Options shared by `bed` and `run`.
 struct SceneCommand {
   std::string scene;
@@ -99,6 +110,7 @@ struct SceneCommand {
   CLI::Option* threads_option = nullptr;
   CLI::Option* scene_option = nullptr;
   CLI::Option* output_option = nullptr;
+  std::vector<std::string> sets;  // --set KEY=VALUE overrides of scene keys
 
   // `governed`: the command steps one world under the thread governor (`bed`, `run`), so it
   // offers --fixed-threads; the studies keep their threads fixed and do not.
@@ -116,6 +128,7 @@ struct SceneCommand {
                          "Worker threads; 0 = all cores (default: the scene's `threads`, else 0)")
             ->check(CLI::Range(0, kMaxThreads));
     command->add_flag("-q,--quiet", quiet, "No progress output");
+    AddSetOption(command, &sets);
     if (governed) {
       command->add_flag("--fixed-threads", fixed_threads,
                         "Use exactly --threads workers every step (default: fewer while timing "
@@ -272,6 +285,8 @@ int Main(int argc, char** argv) {
       "Check a scene as `run` would before any work (the scene, its mesh and bed file, the time "
       "step, the steps and memory the run needs, the dig's path) and print the forecast");
   check->add_option("SCENE", check_scene, "Scene file (YAML)")->required();
+  std::vector<std::string> check_sets;
+  AddSetOption(check, &check_sets);
 
   FramesArgs render_frames;
   std::string render_input;
@@ -468,22 +483,27 @@ int Main(int argc, char** argv) {
 
   try {
     if (*bed) {
-      sim::Scene scene = sim::LoadScene(bed_args.scene);
+      sim::Scene scene = sim::LoadScene(bed_args.scene, bed_args.sets);
       sim::Preflight(&scene, sim::Work::kBed);
       return sim::MakeBed(scene, bed_args.Options(scene));
     }
     if (*run) {
       if (run_args.scene.empty() && run_resume.empty())
         throw sim::InputError("run: SCENE: expected a scene file (or --resume OUT.h5)");
+      if (run_args.scene.empty() && !run_args.sets.empty())
+        throw sim::InputError(
+            "run: --set: expected a SCENE to set keys of (a run resumed without "
+            "one goes on with its checkpoint's scene, the --set it had included)");
       if (!run_resume.empty() && run_args.output_option->count() > 0 &&
           run_args.output != run_resume)
         throw sim::InputError("run: -o " + run_args.output + " and --resume " + run_resume +
                               ": a resumed run writes the output it resumes; give one of them");
       // Resumed without SCENE: the scene text and path its checkpoint holds.
-      sim::Scene scene = !run_args.scene.empty() ? sim::LoadScene(run_args.scene) : [&] {
-        const sim::Checkpoint c = sim::ReadCheckpoint(sim::CheckpointPath(run_resume));
-        return sim::LoadSceneText(c.scene_path, c.scene_yaml);
-      }();
+      sim::Scene scene =
+          !run_args.scene.empty() ? sim::LoadScene(run_args.scene, run_args.sets) : [&] {
+            const sim::Checkpoint c = sim::ReadCheckpoint(sim::CheckpointPath(run_resume));
+            return sim::LoadSceneText(c.scene_path, c.scene_yaml);
+          }();
       sim::Preflight(&scene, sim::Work::kRun);
       sim::RunOptions options = run_args.Options(scene);
       options.stop_after = run_stop_after;
@@ -529,7 +549,7 @@ int Main(int argc, char** argv) {
       return status;
     }
     if (*check) {
-      sim::Scene scene = sim::LoadScene(check_scene);
+      sim::Scene scene = sim::LoadScene(check_scene, check_sets);
       const sim::RunForecast f = sim::Preflight(&scene, sim::Work::kRun);
       std::printf(
           "%s: ok: %lld particles, time step %.4g s, %.4g s simulated in about %.3g "
@@ -550,14 +570,14 @@ int Main(int argc, char** argv) {
       return 0;
     }
     if (*shape) {
-      const sim::Scene scene = sim::LoadScene(shape_args.scene);
+      const sim::Scene scene = sim::LoadScene(shape_args.scene, shape_args.sets);
       auto options = shape_args.OptionsAs<sim::ShapeStudyOptions>(scene);
       options.templates = shape_templates;
       options.bed_dir = shape_beds;
       return sim::RunShapeStudy(scene, options);
     }
     if (*balovnev) {
-      const sim::Scene scene = sim::LoadScene(balovnev_args.scene);
+      const sim::Scene scene = sim::LoadScene(balovnev_args.scene, balovnev_args.sets);
       auto options = balovnev_args.OptionsAs<sim::BalovnevStudyOptions>(scene);
       options.plot = !balovnev_no_plot;
       // The angles' domain, in the flags' own units (sim::Balovnev checks the rest).
@@ -597,7 +617,15 @@ int Main(int argc, char** argv) {
     std::fprintf(stderr, "scoopsim: %s\n", OneLine(e.what()).c_str());
     return kExitInput;
   } catch (const sim::InputError& e) {
-    std::fprintf(stderr, "scoopsim: %s\n", OneLine(e.what()).c_str());
+    // An error found after the scene was loaded (its preflight) about a key given by --set names
+    // the --set, as LoadScene's own errors do.
+    const std::vector<std::string>& sets = *bed        ? bed_args.sets
+                                           : *run      ? run_args.sets
+                                           : *check    ? check_sets
+                                           : *shape    ? shape_args.sets
+                                           : *balovnev ? balovnev_args.sets
+                                                       : check_sets;
+    std::fprintf(stderr, "scoopsim: %s\n", OneLine(sim::NamingSet(e, sets).what()).c_str());
     return kExitInput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "scoopsim: error: %s\n", OneLine(e.what()).c_str());

@@ -8,10 +8,11 @@ Reads the arm series of scoopsim runs of a scene with an `arm:` block (sim/arm_d
   /arm/time (n) [s], /arm/torque_demanded, /arm/torque_applied, /arm/effort_limit (n x joints)
   [N m], /arm/fault_latched (n, uint64); /arm/fault_events (e records: time, flag, flag_name,
   joint, joint_name, value, limit; older files: e x 5 float64 time, flag, joint, value, limit,
-  present only when a fault was raised); root attributes arm_joints (names, comma-separated) and start_time
-  (the dig's start; else the first /arm/time row).
+  present only when a fault was raised); root attributes arm_joints (names, comma-separated) and
+  start_time (the dig's start).
 One panel per run: the demanded torque (the PID's output) and the applied one (clamped at the
-limit) of one joint against the time since the dig began, its effort limit as dashed lines at
+limit) of one joint against the run's time (one clock with the run's stderr and every dataset,
+README "One clock"; the dig's start marked), its effort limit as dashed lines at
 +-limit, the first time the demand reached the limit, and a vertical line at each fault event
 with the flag's name. The joint: --joint NAME, else the joint of the run's first fault event, else
 the joint that came closest to its limit. Flag names as arm/fault_monitor.h.
@@ -50,7 +51,7 @@ def read_events(f):
 
 
 def read_run(path, joint):
-    """The series of one joint of a run file, times from the dig's start."""
+    """The series of one joint of a run file, times on the run's clock."""
     if not os.path.isfile(path):
         raise InputError("%s: no such file (expected a scoopsim run file with /arm/, .h5)" % path)
     try:
@@ -70,7 +71,7 @@ def read_run(path, joint):
                              "column per joint of arm_joints)"
                              % (path, demanded.shape, len(time), len(joints)))
         events = read_events(f)
-        start = float(f.attrs["start_time"]) if "start_time" in f.attrs else float(time[0])
+        start = float(f.attrs["start_time"]) if "start_time" in f.attrs else None
     if joint is not None:
         if joint not in joints:
             raise InputError("--joint %s: %s has no such joint (it has %s)"
@@ -81,10 +82,10 @@ def read_run(path, joint):
     else:
         j = int(np.argmax(np.max(np.abs(demanded) / limit, axis=0)))
     saturated = np.nonzero(np.abs(demanded[:, j]) >= limit[:, j])[0]
-    return {"joint": joints[j], "t": time - start, "demanded": demanded[:, j],
+    return {"joint": joints[j], "t": time, "start": start, "demanded": demanded[:, j],
             "applied": applied[:, j], "limit": limit[:, j],
-            "first_saturation": time[saturated[0]] - start if len(saturated) else None,
-            "events": [(t - start, FLAGS.get(int(flag), "flag %d" % int(flag)),
+            "first_saturation": time[saturated[0]] if len(saturated) else None,
+            "events": [(t, FLAGS.get(int(flag), "flag %d" % int(flag)),
                         joints[int(k)] if 0 <= int(k) < len(joints) else "-", value, lim)
                        for t, flag, k, value, lim in events]}
 
@@ -102,6 +103,9 @@ def plot(runs, labels, title, output):
                 label="applied (clamped)")
         ax.plot(t, run["limit"], color="k", lw=1.0, ls="--", label="effort limit")
         ax.plot(t, -run["limit"], color="k", lw=1.0, ls="--")
+        if run["start"] is not None:
+            ax.axvline(run["start"], color="0.3", lw=1.0, ls="-.",
+                       label="dig starts (%.3f s)" % run["start"])
         if run["first_saturation"] is not None:
             ax.axvline(run["first_saturation"], color="0.5", lw=1.0, ls=":",
                        label="demand reaches the limit (%.3f s)" % run["first_saturation"])
@@ -112,7 +116,7 @@ def plot(runs, labels, title, output):
         ax.set_ylabel("torque [N m]")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="best")
-    axes[-1, 0].set_xlabel("time since the dig began [s]")
+    axes[-1, 0].set_xlabel("time t [s] (the run's clock, as on stderr and in /arm/time)")
     if title:
         fig.suptitle(title)
     fig.tight_layout()

@@ -9,9 +9,11 @@
 
 #include <cmath>
 #include <memory>
+#include <utility>
 
 #include "render/bench.h"
 #include "render/camera.h"
+#include "render/frames.h"
 #include "sim/arm_geometry.h"
 #include "sim/scene.h"
 
@@ -346,14 +348,54 @@ TEST(RendererTest, ArmLinksAreDrawn) {
   EXPECT_NEAR(grey.b, 0.80 * 255, 1);
 }
 
-// The caption's clock starts at the view's clock_start (the dig's start), not at t = 0 (the pour).
-TEST(RendererTest, CaptionClockStartsAtTheDig) {
+// The caption and the fault line sit on a light plate (kPlate, 85% opaque) that keeps them
+// readable over the orange links: an arm link filling the whole frame, a fault latched. Inside the
+// plate, away from the glyphs, every channel is above 200 (kPlate over orange: 247, 219, 219 within
+// rounding), where the link elsewhere is orange (blue 0.20 x 255 within 1); the fault's red glyphs
+// are on the plate. So is the torque bars' block.
+TEST(RendererTest, CaptionAndFaultLineSitOnALightPlate) {
+  dem::TriangleMesh link;
+  link.vertices = {{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}};
+  link.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 2, 1}, {0, 3, 2}};
+  sim::WorldView view;
+  dem::Particles none;
+  view.particles = &none;
+  view.meshes.push_back({&link, dem::Pose{}, sim::MeshRole::kArmLink});
+  view.faults = "JOINT_TORQUE_LIMIT";
+  view.joints = {{"j_a", 1.0, 10.0}};
+  RenderSettings settings = PlainSettings();
+  settings.shading = false;
+  settings.overlays = true;
+  settings.camera.position = {0, 0, 1};
+  settings.camera.target = {0, 0, 0};
+  settings.camera.up = {0, 1, 0};
+  const Image& image = SharedRenderer().Render(view, settings);
+  const int s = 2;  // the font scale at 480 rows
+  const Rgba8 link_colour = image.At(image.width() / 2, image.height() / 2);
+  EXPECT_NEAR(link_colour.b, 0.20 * 255, 1);
+  for (const auto& [x, y] :
+       {std::pair{9 * s, 8 * s}, std::pair{9 * s, 10 * s + 2 * kGlyphHeight * s},
+        std::pair{9 * s, image.height() - 10 * s - (kGlyphHeight + 2) * s}}) {
+    const Rgba8 c = image.At(x, y);
+    EXPECT_GT(c.r, 200) << x << "," << y;
+    EXPECT_GT(c.g, 200) << x << "," << y;
+    EXPECT_GT(c.b, 200) << x << "," << y;
+  }
+  int red = 0;
+  for (int y = 10 * s + kGlyphHeight * s; y < 10 * s + 2 * kGlyphHeight * s; ++y)
+    for (int x = 12 * s; x < 12 * s + TextWidth("FAULT JOINT_TORQUE_LIMIT", s); ++x)
+      red += image.At(x, y) == kMarginOver;
+  EXPECT_GT(red, 100);
+}
+
+// The caption's time is the view's, on the run's one clock (README "One clock": the state's, from
+// the pour), as every dataset and stderr line gives it: exact to the 5 decimals shown.
+TEST(RendererTest, CaptionShowsTheRunsClock) {
   sim::WorldView view;
   view.time = 3.25;
-  view.clock_start = 1.0;
-  EXPECT_EQ(Caption(view), "t = 2.25000 s");
+  EXPECT_EQ(Caption(view), "t = 3.25000 s");
   view.pass = 1;
-  EXPECT_EQ(Caption(view).rfind("t = 2.25000 s   pass 1", 0), 0u) << Caption(view);
+  EXPECT_EQ(Caption(view).rfind("t = 3.25000 s   pass 1", 0), 0u) << Caption(view);
 }
 
 // Every camera preset a scene may name (sim::kRenderCameraPresets) exists here, and frames the
@@ -377,6 +419,56 @@ TEST(CameraTest, PresetsFrameTheBox) {
   EXPECT_EQ(CameraPresetNames().size(), std::size(sim::kRenderCameraPresets));
   Camera camera;
   EXPECT_FALSE(ApplyCameraPreset("nowhere", lo, hi, &camera));
+}
+
+// The arm preset frames the container and every mesh of the view: an "arm" reaching 1.6 m out of
+// a 0.32 m box and 0.6 m above it (the lander's arm beside its trench) projects wholly inside the
+// image, its base included, where trench_oblique (the box alone) leaves the base out. The scoop
+// preset frames a cube of kScoopFrame around the scoop wherever it is, and follows it.
+TEST(CameraTest, ArmPresetFramesTheWholeArmAndScoopPresetFollowsTheScoop) {
+  sim::WorldView view;
+  view.box_min = {0, 0, 0};
+  view.box_max = {0.32, 0.19, 0.15};
+  dem::TriangleMesh arm, scoop;
+  arm.vertices = {{-1.3, 0.27, 0.2}, {-0.8, 0.27, 0.75}, {0.1, 0.1, 0.3}};
+  arm.triangles = {{0, 1, 2}};
+  scoop.vertices = {{-0.05, -0.04, 0}, {0.05, 0.04, 0.08}, {0.05, -0.04, 0}};
+  scoop.triangles = {{0, 1, 2}};
+  dem::Pose at;
+  at.position = {0.15, 0.095, 0.09};
+  view.meshes.push_back({&arm, dem::Pose{}, sim::MeshRole::kArmLink});
+  view.meshes.push_back({&scoop, at, sim::MeshRole::kScoop});
+  auto inside = [](const Camera& camera, const dem::Vec3& x) {
+    double col = 0, row = 0;
+    Pinhole(camera).Project(x, &col, &row);
+    return col >= 0 && col <= camera.width && row >= 0 && row <= camera.height;
+  };
+  dem::Vec3 lo, hi;
+  PresetBounds("arm", view, &lo, &hi);
+  Camera camera;
+  ASSERT_TRUE(ApplyCameraPreset("arm", lo, hi, &camera));
+  for (const dem::Vec3& v : arm.vertices) EXPECT_TRUE(inside(camera, v)) << v.x;
+  for (int k = 0; k < 8; ++k) {
+    const dem::Vec3 corner{(k & 1) ? view.box_max.x : 0.0, (k & 2) ? view.box_max.y : 0.0,
+                           (k & 4) ? view.box_max.z : 0.0};
+    EXPECT_TRUE(inside(camera, corner)) << k;
+  }
+  PresetBounds("trench_oblique", view, &lo, &hi);
+  EXPECT_EQ(lo.x, 0.0);
+  EXPECT_EQ(hi.z, 0.15);
+  Camera box = camera;
+  ApplyCameraPreset("trench_oblique", lo, hi, &box);
+  EXPECT_FALSE(inside(box, arm.vertices[0]));
+
+  // The scoop's cube: centred on the scoop mesh's world extent, kScoopFrame a side.
+  PresetBounds("scoop", view, &lo, &hi);
+  EXPECT_NEAR(0.5 * (lo.x + hi.x), 0.15, 1e-12);
+  EXPECT_NEAR(0.5 * (lo.z + hi.z), 0.09 + 0.04, 1e-12);
+  EXPECT_NEAR(hi.y - lo.y, kScoopFrame, 1e-12);
+  view.meshes[1].pose.position.x += 0.1;
+  dem::Vec3 lo2, hi2;
+  PresetBounds("scoop", view, &lo2, &hi2);
+  EXPECT_NEAR(lo2.x - lo.x, 0.1, 1e-12);
 }
 
 }  // namespace

@@ -25,6 +25,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <ios>
@@ -149,9 +151,12 @@ std::vector<uint64_t> FaultBitRows(const std::string& path) {
   return rows;
 }
 
-// The (flag, joint_name) fields of /arm/fault_events, read by name from its records.
-std::vector<std::pair<uint64_t, std::string>> FaultEventRows(const std::string& path) {
+// The (flag, joint_name) fields of /arm/fault_events, read by name from its records (and each
+// record's time into *times when given).
+std::vector<std::pair<uint64_t, std::string>> FaultEventRows(const std::string& path,
+                                                             std::vector<double>* times = nullptr) {
   struct Row {
+    double time;
     uint64_t flag;
     char joint_name[64];
   };
@@ -161,13 +166,17 @@ std::vector<std::pair<uint64_t, std::string>> FaultEventRows(const std::string& 
   const hid_t text = H5Tcopy(H5T_C_S1);
   H5Tset_size(text, 64);
   const hid_t type = H5Tcreate(H5T_COMPOUND, sizeof(Row));
+  H5Tinsert(type, "time", HOFFSET(Row, time), H5T_NATIVE_DOUBLE);
   H5Tinsert(type, "flag", HOFFSET(Row, flag), H5T_NATIVE_UINT64);
   H5Tinsert(type, "joint_name", HOFFSET(Row, joint_name), text);
   const hid_t space = H5Dget_space(d);
   std::vector<Row> rows(static_cast<size_t>(H5Sget_simple_extent_npoints(space)));
   if (!rows.empty()) H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, rows.data());
   std::vector<std::pair<uint64_t, std::string>> out;
-  for (const Row& r : rows) out.emplace_back(r.flag, r.joint_name);
+  for (const Row& r : rows) {
+    out.emplace_back(r.flag, r.joint_name);
+    if (times != nullptr) times->push_back(r.time);
+  }
   H5Sclose(space);
   H5Tclose(type);
   H5Tclose(text);
@@ -379,8 +388,38 @@ TEST(ArmDriverTest, BoulderWithRetractLiftsTheScoop) {
               scene.arm.substeps * scene.time_step + scene.time_step);
 }
 
+// A frame at the dig's start draws the torques holding the arm up (the PID's preloaded integral,
+// arm::GravityTorques), not empty bars: the view's demanded torques before the first step are,
+// for every joint, those of the first step within 2% of the joint's limit, and j_prox_pitch's is
+// a visible share of its limit (> 5%; ~5.5 N m of 73 in the nominal pose).
+TEST(ArmDriverTest, TorqueBarsAtTheDigsStartShowTheHoldingTorques) {
+  const sim::Scene scene = Scene("arm/nominal_snow.yaml");
+  sim::World world(scene, 1);
+  world.LoadBed(Bed(scene, "snow"));
+  auto driver = std::make_unique<sim::ArmDriver>(scene);
+  const sim::ArmDriver* arm = driver.get();
+  world.StartDig(std::move(driver));
+  auto joints = [arm] {
+    sim::WorldView view;  // what World::View() hands a frame
+    arm->AddToView(&view);
+    return view.joints;
+  };
+  const std::vector<sim::JointView> first = joints();
+  ASSERT_TRUE(world.Step().ok());
+  const std::vector<sim::JointView> stepped = joints();
+  ASSERT_EQ(first.size(), 6u);
+  ASSERT_EQ(stepped.size(), 6u);
+  for (size_t j = 0; j < first.size(); ++j)
+    EXPECT_NEAR(first[j].torque, stepped[j].torque, 0.02 * first[j].limit) << first[j].name;
+  EXPECT_GT(std::abs(first[kProxPitch].torque), 0.05 * first[kProxPitch].limit);
+  std::printf("frame 0: j_prox_pitch %.4g N m of %.4g (%.1f%%)\n", first[kProxPitch].torque,
+              first[kProxPitch].limit,
+              100 * std::abs(first[kProxPitch].torque) / first[kProxPitch].limit);
+}
+
 // The snapshots of a coupled dig hold the scoop and the arm's links where they were. The nominal
-// dig, stepped 0.3 s with a snapshot every 2000 steps: at each snapshot the test records the
+// dig, stepped 0.3 s with a snapshot at its start and every 2000 steps: at each snapshot the test
+// records the
 // scoop's DEM pose and Bullet's joint positions. In the file (read back through sim::SavedRun),
 // the scoop's points are the scene's scoop mesh moved by that pose, and the arm's points are
 // sim::ArmGeometry's link meshes at the poses forward kinematics gives for those joint positions
@@ -401,7 +440,11 @@ TEST(ArmDriverTest, SnapshotsHoldTheScoopAndTheLinksWhereTheyWere) {
     const sim::ArmDriver* arm = driver.get();
     world.StartDig(std::move(driver));
     const double start = world.system().time();
+    // The first snapshot, at the dig's start: the scoop placed, the arm at its first pose.
     int64_t snapshots = world.output()->snapshot_count();
+    ASSERT_EQ(snapshots, 1);
+    scoop.push_back(world.system().mesh_motion(0).pose);
+    q.push_back(arm->JointPositions());
     while (world.system().time() - start < 0.3) {
       ASSERT_TRUE(world.Step().ok());
       if (world.output()->snapshot_count() == snapshots) continue;
@@ -454,6 +497,87 @@ TEST(ArmDriverTest, SnapshotsHoldTheScoopAndTheLinksWhereTheyWere) {
     EXPECT_EQ(v0, a.vertices.size());
     EXPECT_EQ(t0, a.triangles.size());
   }
+}
+
+// The first number after `prefix` in `text` (NaN when absent).
+double NumberAfter(const std::string& text, const std::string& prefix) {
+  const size_t at = text.find(prefix);
+  return at == std::string::npos ? std::nan("")
+                                 : std::strtod(text.c_str() + at + prefix.size(), nullptr);
+}
+
+// One clock (README "One clock"): every time a run prints is the time its datasets hold. The
+// nominal scene from its saved bed with j_prox_pitch derated to 5% (below its gravity torque, ~4 N
+// m, so the flag rises one hold time in) and a snapshot every 1000 steps, stopped 0.15 s into the
+// dig, on the command line (`--set`). Compared, to the digits printed (4 decimals: 5e-5 s; 6
+// significant: 1e-6 s): the dig's start on stderr and the root attribute start_time, the first
+// /arm/ and /scoop/ rows (within one row, dig.interval) and the first snapshot (exactly); the
+// fault's time on stderr and /arm/fault_events, and the first /arm/ row with the flag latched
+// (within one row after it); the stop on stderr, the dig's end and the progress line's last time,
+// and the last /arm/ and /scoop/ rows and snapshot (within one row before it).
+TEST(ArmDriverTest, StderrAndDatasetsShareOneClock) {
+  const std::string scene_path = kSourceDir + "/scenes/arm/nominal_snow.yaml";
+  const std::string bed = Bed(Scene("arm/nominal_snow.yaml"), "snow");
+  const std::string out = (TempDir() / "clock.h5").string();
+  const std::string err = (TempDir() / "clock.txt").string();
+  ASSERT_EQ(scoopsim_test::RunScoopsim(
+                "run " + scene_path + " -o " + out + " --stop-after 0.15 --threads 1 --set " +
+                    "bed.file=" + bed + " --set arm.derate.j_prox_pitch=0.05 --set " +
+                    "output.snapshot_every=1000",
+                err),
+            0);
+  const std::string text = scoopsim_test::ReadText(err);
+  const double dig_start = NumberAfter(text, "s simulated (t = ");
+  const double dig_end = NumberAfter(text.substr(text.find("s simulated (t = ")), " to ");
+  const double fault = NumberAfter(text, "fault JOINT_TORQUE_LIMIT at t = ");
+  const double stop = NumberAfter(text, "stopped at t = ");
+  // The progress line's last "t NOW/END s" (the line that reads 100% or where it stopped).
+  const size_t last_progress = text.rfind("dig ");
+  ASSERT_NE(last_progress, std::string::npos) << text;
+  const double progress = NumberAfter(text.substr(last_progress), "  t ");
+  ASSERT_TRUE(std::isfinite(dig_start) && std::isfinite(dig_end) && std::isfinite(fault) &&
+              std::isfinite(stop) && std::isfinite(progress))
+      << text;
+
+  const sim::SavedRun run(out);
+  const sim::Scene scene = Scene("arm/nominal_snow.yaml");
+  const double row = scene.dig.interval, printed4 = 5e-5, printed6 = 1e-6 * stop;
+  const double start_time = run.RootNumber("start_time", std::nan(""));
+  EXPECT_NEAR(dig_start, start_time, printed4);
+  EXPECT_NEAR(dig_end, stop, printed4);
+  EXPECT_NEAR(progress, stop, printed4);
+  EXPECT_GT(stop, start_time + 0.15 - printed6);
+
+  const sim::ArmSeries arm = run.Arm();
+  const sim::ScoopSeries scoop = run.Scoop();
+  ASSERT_FALSE(arm.empty());
+  ASSERT_FALSE(scoop.time.empty());
+  for (const std::vector<double>* t : {&arm.time, &scoop.time}) {
+    EXPECT_GE(t->front(), start_time);
+    EXPECT_LE(t->front(), start_time + row);
+    EXPECT_LE(t->back(), stop + printed6);
+    EXPECT_GE(t->back(), stop - row - printed6);
+  }
+  const std::vector<sim::SnapshotInfo> snapshots = run.Snapshots();
+  ASSERT_GE(snapshots.size(), 2u);
+  EXPECT_EQ(snapshots.front().time, start_time);
+  EXPECT_LE(snapshots.back().time, stop + printed6);
+
+  std::vector<double> events;
+  FaultEventRows(out, &events);
+  ASSERT_FALSE(events.empty());
+  EXPECT_NEAR(events.front(), fault, printed4);
+  size_t latched = 0;
+  while (latched < arm.time.size() && (arm.fault_latched[latched] & kJointTorqueLimit) == 0)
+    ++latched;
+  ASSERT_LT(latched, arm.time.size());
+  EXPECT_GE(arm.time[latched], fault - printed4);
+  EXPECT_LE(arm.time[latched], fault + row + printed4);
+  EXPECT_GT(fault, start_time + scene.arm.hold_time - printed4);  // one clock, not the dig's
+  std::printf(
+      "one clock: dig from t = %.4f s (start_time %.6f s); fault at t = %.4f s (stderr), %.6f s "
+      "(/arm/fault_events), first latched row %.6f s; stop at t = %.6g s, last /arm/ row %.6f s\n",
+      dig_start, start_time, fault, events.front(), arm.time[latched], stop, arm.time.back());
 }
 
 // A scene with the nominal scene's keys and `arm` as its arm: block.

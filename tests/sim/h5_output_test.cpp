@@ -408,6 +408,26 @@ TEST_F(H5Test, ConstructorCreatesFoldersOrNamesThePath) {
   }
 }
 
+// A file without snapshots has no XDMF sidecar: an earlier run's at the same path (naming
+// snapshots this file lacks) is removed when the file is made, and none is written.
+TEST_F(H5Test, NoSnapshotsNoSidecar) {
+  const std::string path = Path("plain.h5");
+  const std::string xdmf = Path("plain.xdmf");
+  {
+    H5Output out(path, "", "v");
+    out.WriteSnapshot(0.0, MakeParticles(2, 0.0));
+  }
+  ASSERT_TRUE(std::filesystem::exists(xdmf));
+  {
+    H5Output out(path, "", "v");
+    const double x = 1;
+    out.AppendRow("/series/x", &x, 1);
+    EXPECT_FALSE(std::filesystem::exists(xdmf));
+    out.Close();
+  }
+  EXPECT_FALSE(std::filesystem::exists(xdmf));
+}
+
 // MaybeFlush flushes only once flush_seconds of wall time have passed since the last flush.
 TEST_F(H5Test, MaybeFlushHonoursTheFlushPeriod) {
   H5Output out(Path("run.h5"), "", "v", /*flush_seconds=*/3600.0);

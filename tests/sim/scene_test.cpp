@@ -713,6 +713,99 @@ TEST(CliTest, BadSceneExitsTwoWithOneLine) {
   }
 }
 
+// --set KEY=VALUE overrides a scene key before the scene is checked: the value is read as the
+// scene's own (bed.count, a nested key, a key the file leaves out, a list item), the scene's text
+// keeps the overrides as trailing `# scoopsim --set` lines (what the output stores, and what a
+// reader of that text applies again), the lines of the file's own keys are unchanged, and a bad key
+// or value gives the scene's one-line error with `--set KEY=VALUE` for the file and line.
+TEST(SceneSetTest, OverridesAreCheckedAsTheSceneIs) {
+  WriteFile("set_mats.yaml", kGoodMaterials);
+  const std::string good = Replace(kGoodScene, "materials: mats.yaml", "materials: set_mats.yaml");
+  const std::string path = WriteFile("set_good.yaml", good);
+  const std::vector<std::string> sets = {"bed.count=123", "time_step.rayleigh_fraction=0.1",
+                                         "render.camera=top", "box.max.2=0.09"};
+  const Scene scene = LoadScene(path, sets);
+  EXPECT_EQ(scene.bed.count, 123);
+  EXPECT_EQ(scene.rayleigh_fraction, 0.1);
+  EXPECT_EQ(scene.render.camera_preset, "top");
+  EXPECT_EQ(scene.box_max.z, 0.09);
+  EXPECT_EQ(scene.box_max.y, 0.05);
+  EXPECT_EQ(scene.yaml_text, good +
+                                 "# scoopsim --set bed.count=123\n"
+                                 "# scoopsim --set time_step.rayleigh_fraction=0.1\n"
+                                 "# scoopsim --set render.camera=top\n"
+                                 "# scoopsim --set box.max.2=0.09\n");
+  const Scene again = LoadSceneText(path, scene.yaml_text);
+  EXPECT_EQ(again.bed.count, 123);
+  EXPECT_EQ(again.box_max.z, 0.09);
+  EXPECT_EQ(LoadScene(path).bed.count, 2000);  // the file itself is unchanged
+
+  auto error_of = [&](const std::string& scene_path, const std::vector<std::string>& s) {
+    try {
+      LoadScene(scene_path, s);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(loaded)");
+  };
+  // A bad value, a bad key, a key under a value that is not a map, a malformed override.
+  EXPECT_EQ(error_of(path, {"bed.count=5", "bed.radius=-1"}),
+            "--set bed.radius=-1: bed.radius: expected a number > 0 or a range [rmin, rmax] with "
+            "0 < rmin <= rmax (m), got -1");
+  EXPECT_EQ(error_of(path, {"bed.cout=5"})
+                .rfind("--set bed.cout=5: bed.cout: expected one of the "
+                       "keys material, radius, count",
+                       0),
+            0u)
+      << error_of(path, {"bed.cout=5"});
+  EXPECT_EQ(error_of(path, {"bed.count.x=5"}).rfind("--set bed.count.x=5: bed.count: expected", 0),
+            0u)
+      << error_of(path, {"bed.count.x=5"});
+  EXPECT_EQ(error_of(path, {"bed.count"}),
+            "--set: expected KEY=VALUE with KEY a dotted scene key (dig.bite_depth), got "
+            "'bed.count'");
+  // An error in the file itself keeps its file and line whatever is set.
+  const std::string bad = WriteFile("set_bad.yaml", Replace(good, "count: 2000", "count: -3"));
+  EXPECT_EQ(error_of(bad, {"bed.seed=2", "duration: 0.02"}).rfind("--set: expected KEY=VALUE", 0),
+            0u);
+  EXPECT_EQ(error_of(bad, {"bed.seed=2"}).rfind(bad + ":9: bed.count: expected", 0), 0u)
+      << error_of(bad, {"bed.seed=2"});
+}
+
+// The command line's --set on check, run and bed: a good key changes the scene (check's forecast
+// counts the particles set), a bad key or value exits 2 with one line naming the --set.
+TEST(CliTest, SetOverridesASceneKeyOrExitsTwoNamingIt) {
+  WriteFile("cli_set_mats.yaml", kGoodMaterials);
+  const std::string scene = WriteFile(
+      "cli_set.yaml", Replace(kGoodScene, "materials: mats.yaml", "materials: cli_set_mats.yaml"));
+  const CommandResult good = RunCommand("check '" + scene + "' --set bed.count=1500");
+  EXPECT_EQ(good.status, 0) << good.output;
+  EXPECT_NE(good.output.find(": ok: 1500 particles"), std::string::npos) << good.output;
+  const CommandResult two =
+      RunCommand("check '" + scene + "' --set bed.count=1500 --set bed.count=1700");
+  EXPECT_NE(two.output.find(": ok: 1700 particles"), std::string::npos) << two.output;
+  const std::string out = (TempDir() / "cli_set_out" / "run.h5").string();
+  for (const char* command : {"check", "run", "bed"}) {
+    SCOPED_TRACE(command);
+    const std::string tail = std::string(command) == "check" ? "" : " -o '" + out + "' --quiet";
+    const CommandResult key =
+        RunCommand(std::string(command) + " '" + scene + "' --set bed.cout=1500" + tail);
+    EXPECT_EQ(key.status, 2) << key.output;
+    EXPECT_EQ(CountLines(key.output), 1) << key.output;
+    EXPECT_EQ(
+        key.output.rfind("scoopsim: --set bed.cout=1500: bed.cout: expected one of the keys", 0),
+        0u)
+        << key.output;
+    const CommandResult value =
+        RunCommand(std::string(command) + " '" + scene + "' --set bed.radius=-1" + tail);
+    EXPECT_EQ(value.status, 2) << value.output;
+    EXPECT_EQ(value.output,
+              "scoopsim: --set bed.radius=-1: bed.radius: expected a number > 0 or a range "
+              "[rmin, rmax] with 0 < rmin <= rmax (m), got -1\n");
+  }
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
 TEST(CliTest, MissingSceneExitsTwoWithOneLine) {
   const CommandResult r = RunCommand("run no/such/scene.yaml -o /dev/null --quiet");
   EXPECT_EQ(r.status, 2);

@@ -36,6 +36,7 @@
 #include "arm/kinematics.h"
 #include "sim/commands.h"
 #include "sim/h5_output.h"
+#include "sim/saved_run.h"
 #include "sim/scene.h"
 #include "sim/wrench_table.h"
 #include "tests/cli_util.h"
@@ -409,6 +410,42 @@ TEST(TableArm, SameRowsOnOneAndTwoThreads) {
   for (const char* name : {"/arm/joint_position", "/arm/torque_demanded", "/scoop/force_scoop"}) {
     int w = 0;
     EXPECT_EQ(ReadRows(a.output, name, &w), ReadRows(b.output, name, &w)) << name;
+  }
+}
+
+// The table-driven arm writes snapshots, so `scoopsim render` replays its runs: one at its start
+// and one every output.snapshot_every arm steps, each with the scoop and the arm's links and no
+// particles; and --stop-after ends it (a 0.5 s hold stopped at 0.2 s, the step 3.68e-5 s, a
+// snapshot every 1000 steps: 1 + steps / 1000 of them, at k * 1000 * h within 1e-12 s).
+TEST(TableArm, SnapshotsHoldTheScoopAndTheArmAndStopAfterEndsTheRun) {
+  const sim::Scene scene =
+      sim::LoadScene(WriteScene("snap", SceneText(WriteTable("snap", kW), "[{hold: 0.5}]") +
+                                            "output: {snapshot_every: 1000}\n"));
+  sim::RunOptions options;
+  options.output = (TempDir() / "snap.h5").string();
+  options.quiet = true;
+  options.stop_after = 0.2;
+  const sim::TableArmResult result = sim::RunTableArm(scene, options);
+  ASSERT_EQ(result.exit_status, 0);
+  const double h = scene.time_step;
+  EXPECT_GE(result.simulated, 0.2 - 1e-12);
+  EXPECT_LT(result.simulated, 0.2 + h);
+  const sim::SavedRun run(options.output);
+  const std::vector<sim::SnapshotInfo> snapshots = run.Snapshots();
+  ASSERT_EQ(static_cast<int64_t>(snapshots.size()), 1 + result.steps / 1000);
+  ASSERT_GE(snapshots.size(), 2u);
+  EXPECT_EQ(snapshots[0].time, 0.0);
+  EXPECT_NEAR(snapshots[1].time, 1000 * h, 1e-12);
+  for (const sim::SnapshotInfo& snapshot : snapshots) {
+    dem::Particles particles;
+    run.ReadSnapshot(snapshot, &particles);
+    EXPECT_EQ(particles.size(), 0u);
+    const std::vector<sim::SnapshotMesh> meshes = run.ReadSnapshotMeshes(snapshot);
+    ASSERT_EQ(meshes.size(), 2u);
+    EXPECT_EQ(meshes[0].name, "arm");
+    EXPECT_GT(meshes[0].mesh.triangles.size(), 0u);
+    EXPECT_EQ(meshes[1].name, "scoop");
+    EXPECT_EQ(meshes[1].mesh.vertices.size(), scene.dig.scoop.geometry.vertices.size());
   }
 }
 

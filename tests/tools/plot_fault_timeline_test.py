@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """tools/plot_fault_timeline.py on synthetic arm run files: a run whose j_b demand crosses its
 limit and raises JOINT_TORQUE_LIMIT one hold time later, and one without a fault, plotted together
-(the fault's joint and time are reported as written, times from the root attribute start_time);
+(the fault's joint and its time as written in /arm/fault_events: the run's one clock, README "One
+clock", not shifted by the root attribute start_time);
 --joint picks another joint; a missing dataset or file, an unknown joint or a wrong number of labels
 gives one line and exit status 2."""
 
@@ -61,7 +62,7 @@ def main():
         png = os.path.join(d, "timeline.png")
         result = run([fault, calm, "-o", png, "--labels", "fault,calm", "--title", "test"])
         assert result.returncode == 0, result.stderr
-        assert "fault: JOINT_TORQUE_LIMIT on j_b at 0.600 s" in result.stdout, result.stdout
+        assert "fault: JOINT_TORQUE_LIMIT on j_b at 2.600 s" in result.stdout, result.stdout
         assert "calm: no fault" in result.stdout, result.stdout
         with open(png, "rb") as f:
             assert f.read(8) == b"\x89PNG\r\n\x1a\n"

@@ -25,11 +25,12 @@ TYPES = {("Float", "8"): np.float64, ("Int", "8"): np.int64, ("Int", "4"): np.in
 
 
 def scene_text(folder):
-    """scenes/fault/boulder.yaml with its files named absolutely and snapshots every 2000 steps."""
+    """scenes/fault/boulder.yaml with its files named absolutely (snapshots every 2000 steps are
+    set on the command line)."""
     text = open(os.path.join(ROOT, "scenes", "fault", "boulder.yaml")).read()
     text = re.sub(r"(materials: |mesh: |urdf: )(\.\./[^\s,}]+)",
                   lambda m: m.group(1) + os.path.normpath(os.path.join(folder, m.group(2))), text)
-    return text + "output: {snapshot_every: 2000}\n"
+    return text
 
 
 def rotation(q):
@@ -62,7 +63,8 @@ def main():
         out = os.path.join(d, "boulder.h5")
         env = dict(os.environ, OMP_WAIT_POLICY="passive")
         result = subprocess.run([binary, "run", scene, "-o", out, "--stop-after", "0.4",
-                                 "--threads", "1", "--quiet"], capture_output=True, text=True,
+                                 "--set", "output.snapshot_every=2000", "--threads", "1",
+                                 "--quiet"], capture_output=True, text=True,
                                 env=env)
         assert result.returncode == 0, result.stderr
         xdmf = os.path.join(d, "boulder.xdmf")
