@@ -140,10 +140,15 @@ void CheckInertial(const Reporter& report, const std::string& link, const urdf::
     raw.erase(raw.find_last_not_of(" \t\n") + 1);
     if (raw.empty()) continue;
     char* end = nullptr;
-    std::strtod(raw.c_str(), &end);
+    const double value = std::strtod(raw.c_str(), &end);
     if (end == raw.c_str() || *end != '\0') {
       report.Fail("link", link, "link '" + link + "' <" + child + " " + attr + ">",
                   "expected a number, got '" + raw + "'");
+    }
+    // urdfdom reads "nan" and "inf" as 0 too.
+    if (!std::isfinite(value)) {
+      report.Fail("link", link, "link '" + link + "' <" + child + " " + attr + ">",
+                  "expected a finite number, got '" + raw + "'");
     }
   }
   const double values[] = {in.mass, in.ixx, in.ixy, in.ixz, in.iyy, in.iyz, in.izz};
@@ -326,12 +331,15 @@ void CheckTree(const Reporter& report, const urdf::ModelInterface& urdf) {
 }  // namespace
 
 ArmModel LoadArmModel(const std::string& path, const std::string& tip_link) {
+  std::error_code ec;
+  // A folder opens as a stream that reads nothing (urdfdom: "Error document empty").
+  if (std::filesystem::is_directory(path, ec))
+    throw ArmModelError(path + ": URDF file: expected a readable file, got a folder");
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     throw ArmModelError(path + ": URDF file: expected a readable file, got " +
                         std::strerror(errno));
   }
-  std::error_code ec;
   const std::uintmax_t size = std::filesystem::file_size(path, ec);
   if (!ec && size > kMaxUrdfBytes) throw ArmModelError(path + ": URDF file: " + TooLarge(size));
   std::ostringstream text;
