@@ -6,10 +6,13 @@
 // named another key, or the command ran without a word, or it died): the row's comment says
 // what it printed. The test prints the table's size and its pass count.
 #include <gtest/gtest.h>
+#include <sys/mount.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -316,6 +319,28 @@ TEST(HandCasesTest, EachBadInputGivesItsExitAndNamesItsKey) {
     passed += ok;
   }
   std::printf("hand cases: %zu rows, %d passed\n", rows.size(), passed);
+}
+
+// Defect: a sweep into a read-only folder failed each of its cases alike, one line each, and ended
+// "4 of 4 finished". Now refused once before any case: exit 2, one line naming -o. The folder is
+// a tmpfs remounted read-only (root alone may write a chmod 555 folder); skipped where mounting is
+// not allowed.
+TEST(HandCasesTest, ReadOnlySweepOutputIsRefusedOnce) {
+  const fs::path dir = scoopsim_test::ProcessTempDir("hand_cases_ro");
+  const fs::path out = dir / "ro";
+  const scoopsim_test::ScopedTmpfs tmpfs(out, "64k");
+  if (!tmpfs.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here: " << tmpfs.error();
+  if (::mount(nullptr, out.c_str(), nullptr, MS_REMOUNT | MS_RDONLY, nullptr) != 0)
+    GTEST_SKIP() << "cannot remount the tmpfs read-only: " << std::strerror(errno);
+  const std::string err = (dir / "ro.err").string();
+  EXPECT_EQ(scoopsim_test::RunScoopsim("sweep " + std::string(SCOOPSIM_SOURCE_DIR) +
+                                           "/scenes/sweeps/tiny.yaml -o " + out.string() + " -q",
+                                       err),
+            2);
+  EXPECT_EQ(ReadText(err), "scoopsim: -o " + out.string() +
+                               ": expected an output folder scoopsim can write, got Read-only file "
+                               "system (" +
+                               (out / "cases").string() + ")\n");
 }
 
 }  // namespace
