@@ -126,11 +126,9 @@ Inertial LinkInertial(const urdf::Inertial& in) {
   return out;
 }
 
-// Checks a link's inertial: finite, mass > 0, inertia symmetric positive definite with principal
-// moments obeying the triangle inequality (a real body's do).
-void CheckInertial(const Reporter& report, const std::string& link, const urdf::Inertial& in) {
-  // Values as written first: urdfdom reads "abc" (or "") as 0, which the checks below would
-  // report as "got 0".
+// Checks a link's inertial values as written: urdfdom reads "abc", "" and "nan" as 0, which the
+// checks of CheckInertial would report as "got 0" (and a fixed link's would pass unseen).
+void CheckWrittenInertial(const Reporter& report, const std::string& link) {
   const std::pair<const char*, const char*> written[] = {
       {"mass", "value"},  {"inertia", "ixx"}, {"inertia", "ixy"}, {"inertia", "ixz"},
       {"inertia", "iyy"}, {"inertia", "iyz"}, {"inertia", "izz"}};
@@ -151,6 +149,12 @@ void CheckInertial(const Reporter& report, const std::string& link, const urdf::
                   "expected a finite number, got '" + raw + "'");
     }
   }
+}
+
+// Checks a link's inertial: finite, mass > 0, inertia symmetric positive definite with principal
+// moments obeying the triangle inequality (a real body's do).
+void CheckInertial(const Reporter& report, const std::string& link, const urdf::Inertial& in) {
+  CheckWrittenInertial(report, link);
   const double values[] = {in.mass, in.ixx, in.ixy, in.ixz, in.iyy, in.iyz, in.izz};
   for (double v : values) {
     if (!std::isfinite(v)) {
@@ -469,6 +473,8 @@ ArmModel ParseArmModel(const std::string& urdf_text, const std::string& source,
       }
     } else if (moving) {
       CheckInertial(report, link->name, *link->inertial);
+    } else {
+      CheckWrittenInertial(report, link->name);  // the base's mass is printed, not simulated
     }
     if (link->inertial) Merge(&body.inertial, Transformed(LinkInertial(*link->inertial), in_body));
     Frame frame{link->name, in_body};

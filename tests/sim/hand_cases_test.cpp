@@ -108,6 +108,7 @@ void MakeInputs(const fs::path& dir) {
   WriteText(dir / "missing_mesh.urdf",
             Edit(urdf, "<geometry><cylinder radius=\"0.03\" length=\"0.12\"/></geometry>",
                  "<geometry><mesh filename=\"missing.stl\"/></geometry>"));
+  WriteText(dir / "base_nan.urdf", Edit(urdf, "<mass value=\"921.41\"/>", "<mass value=\"nan\"/>"));
   WriteText(dir / "effort.urdf", Edit(urdf, "effort=\"70.9\"", "effort=\"-70.9\""));
   fs::copy_file(src + "/assets/scoop.stl", dir / "scoop.stl");
   const std::string arm =
@@ -174,6 +175,9 @@ const std::vector<Row>& Rows() {
       // Was "link 'l_shou' <mass>: expected a mass > 0 kg, got 0".
       {"arm info {d}/mass_nan.urdf", 2,
        "link 'l_shou' <mass value>: expected a finite number, got 'nan'"},
+      // Was accepted (exit 0), the base's mass printed as 0.
+      {"arm info {d}/base_nan.urdf", 2,
+       "link 'base_link' <mass value>: expected a finite number, got 'nan'"},
       // Was "<robot>: expected a URDF (XML with one <robot> element), got: Error document empty."
       {"arm info {d}/a_folder", 2, "a_folder: URDF file: expected a readable file, got a folder"},
       // Was "got no such file".

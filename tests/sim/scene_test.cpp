@@ -357,7 +357,7 @@ const BadCase kBadCases[] = {
      "radius: [2.0e-3, 1.0e-3]",
      "",
      "",
-     {"@.yaml:8: bed.radius: expected", "0 < rmin <= rmax", "got [2.0e-3, 1.0e-3]",
+     {"@.yaml:8: bed.radius: expected", "1e-6 <= rmin <= rmax", "got [2.0e-3, 1.0e-3]",
       "range reversed"}},
     {"negative_count",
      "count: 2000",
