@@ -401,22 +401,17 @@ RunForecast Preflight(Scene* scene, Work work) {
     CheckDigPath(*scene, f.surface, clear_z, surface_from);
   }
 
+  // What a pass's driver knows of the bed (a dig's).
+  const BedContext context{&scene->dig.scoop.geometry, f.surface, clear_z, scene->time_step, 0.0};
+
   // 3. Steps: settling (a bed still to be poured) and the run.
   f.simulated = from_file ? 0.0 : bed.settle_max_time;
   std::string time_key = "bed.settle.max_time";
   if (work == Work::kRun) {
     if (scene->dig.enabled) {
-      const BedContext context{&scene->dig.scoop.geometry, f.surface, clear_z, scene->time_step,
-                               0.0};
       const std::unique_ptr<KinematicDriver> driver = KinematicDriver::ForDig(scene->dig);
       for (int pass = 1; pass <= scene->dig.passes; ++pass)
         f.simulated += driver->PlannedDuration(pass, context);
-      // The arm's plan of each pass (IK): a path out of its reach is refused here, before any
-      // work (ArmDriver throws InputError naming arm.base).
-      if (scene->arm.enabled && !scene->arm.table_driven && scene->arm.model) {
-        ArmDriver arm(*scene, /*announce=*/false);
-        for (int pass = 1; pass <= scene->dig.passes; ++pass) arm.PlannedDuration(pass, context);
-      }
       time_key = "dig";
     } else {
       f.simulated += scene->duration;
@@ -439,6 +434,14 @@ RunForecast Preflight(Scene* scene, Work work) {
            finite ? "about " + Num(f.steps) + " " + step + " for " + Num(f.simulated) +
                         " s simulated: the run could never end"
                   : "its planned time has no end");
+  }
+  // The arm's plan of each pass (IK), once the run's length is known to be sane (its path is
+  // sampled every 10 ms): a path out of its reach is refused here, before any work (ArmDriver
+  // throws InputError naming arm.base).
+  if (work == Work::kRun && scene->dig.enabled && scene->arm.enabled && !scene->arm.table_driven &&
+      scene->arm.model) {
+    ArmDriver arm(*scene, /*announce=*/false);
+    for (int pass = 1; pass <= scene->dig.passes; ++pass) arm.PlannedDuration(pass, context);
   }
   return f;
 }
