@@ -320,9 +320,9 @@ void CheckDigPath(const Scene& scene, double surface, double clear_z,
   }
 }
 
-// The inputs of the scene's time step, for messages: "rayleigh_fraction 0.25 x the Rayleigh
-// time (paper eq. 4) of bed.radius 0.008 m spheres of snow (density 300 kg/m^3, shear modulus
-// ...)".
+// The inputs of the scene's time step, for messages: "time_step.rayleigh_fraction 0.25 x the
+// Rayleigh time (paper eq. 4) of bed.radius 0.008 m, material snow (scenes/materials.yaml:
+// density 300 kg/m^3, shear_modulus ... Pa, poisson ...)".
 std::string TimeStepInputs(const Scene& scene) {
   const BedSpec& bed = scene.bed;
   const int index = scene.materials.Find(bed.material);
