@@ -126,8 +126,9 @@ Inertial LinkInertial(const urdf::Inertial& in) {
   return out;
 }
 
-// Checks that a link's mass and inertia are numbers as written: urdfdom reads "abc" (or "") as 0,
-// which the checks of CheckInertial would report as "got 0".
+// Checks a link's inertial values as written: urdfdom reads "abc", "" and "nan" as 0, which the
+// checks of CheckInertial would report as "got 0" (and a fixed link's, or the base's, would pass
+// unseen). Called for every link with an <inertial>, frames and the base included.
 void CheckWrittenNumbers(const Reporter& report, const std::string& link) {
   const std::pair<const char*, const char*> written[] = {
       {"mass", "value"},  {"inertia", "ixx"}, {"inertia", "ixy"}, {"inertia", "ixz"},
@@ -138,10 +139,15 @@ void CheckWrittenNumbers(const Reporter& report, const std::string& link) {
     raw.erase(raw.find_last_not_of(" \t\n") + 1);
     if (raw.empty()) continue;
     char* end = nullptr;
-    std::strtod(raw.c_str(), &end);
+    const double value = std::strtod(raw.c_str(), &end);
     if (end == raw.c_str() || *end != '\0') {
       report.Fail("link", link, "link '" + link + "' <" + child + " " + attr + ">",
                   "expected a number, got '" + raw + "'");
+    }
+    // urdfdom reads "nan" and "inf" as 0 too.
+    if (!std::isfinite(value)) {
+      report.Fail("link", link, "link '" + link + "' <" + child + " " + attr + ">",
+                  "expected a finite number, got '" + raw + "'");
     }
   }
 }
@@ -329,12 +335,15 @@ void CheckTree(const Reporter& report, const urdf::ModelInterface& urdf) {
 }  // namespace
 
 ArmModel LoadArmModel(const std::string& path, const std::string& tip_link) {
+  std::error_code ec;
+  // A folder opens as a stream that reads nothing (urdfdom: "Error document empty").
+  if (std::filesystem::is_directory(path, ec))
+    throw ArmModelError(path + ": URDF file: expected a readable file, got a folder");
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     throw ArmModelError(path + ": URDF file: expected a readable file, got " +
                         std::strerror(errno));
   }
-  std::error_code ec;
   const std::uintmax_t size = std::filesystem::file_size(path, ec);
   if (!ec && size > kMaxUrdfBytes) throw ArmModelError(path + ": URDF file: " + TooLarge(size));
   std::ostringstream text;

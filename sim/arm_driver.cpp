@@ -19,7 +19,8 @@
 namespace sim {
 namespace {
 
-constexpr double kSample = 0.01;  // path sampling for the IK [s]
+constexpr double kSample = 0.01;        // path sampling for the IK [s]
+constexpr int kMaxSamples = 100000000;  // of a path (a pass of 1e6 s), kept within int's range
 
 Eigen::Vector3d ToEigen(const dem::Vec3& v) { return {v.x, v.y, v.z}; }
 dem::Vec3 ToDem(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
@@ -173,7 +174,9 @@ struct ArmDriver::Impl {
     const PassStart start = path.BeginPass(pass, bed);
     const double d = start.duration;
     std::vector<arm::PosePoint> points;
-    const int samples = std::max(1, static_cast<int>(std::ceil(d / kSample - 1e-9)));
+    // In double first: a cast of a count past int's range is undefined behaviour.
+    const int samples =
+        static_cast<int>(std::clamp(std::ceil(d / kSample - 1e-9), 1.0, double{kMaxSamples}));
     const Eigen::Isometry3d to_base = base.inverse();
     for (int s = 0; s <= samples; ++s) {
       const double tau = std::min(d, s * kSample);
@@ -337,7 +340,8 @@ struct ArmDriver::Impl {
       mode = Mode::kHold;
       try {
         const double length = spec.retract_distance / spec.retract_speed;
-        const int samples = std::max(1, static_cast<int>(std::ceil(length / kSample)));
+        const int samples =
+            static_cast<int>(std::clamp(std::ceil(length / kSample), 1.0, double{kMaxSamples}));
         const Eigen::Isometry3d start = bullet->BodyPose(scoop_body);
         const Eigen::Isometry3d to_base = base.inverse();
         std::vector<arm::PosePoint> points;

@@ -92,7 +92,7 @@ void AppendSphere(double r, const Eigen::Isometry3d& origin, dem::TriangleMesh* 
   Append(v, t, origin, mesh);
 }
 
-void AppendShape(const arm::Shape& s, dem::TriangleMesh* mesh) {
+void AppendShape(const std::string& urdf, const arm::Shape& s, dem::TriangleMesh* mesh) {
   switch (s.kind) {
     case arm::Shape::Kind::kBox:
       AppendBox(0.5 * s.size, s.origin, mesh);
@@ -104,7 +104,14 @@ void AppendShape(const arm::Shape& s, dem::TriangleMesh* mesh) {
       AppendSphere(s.size.x(), s.origin, mesh);
       break;
     case arm::Shape::Kind::kMesh: {
-      const dem::TriangleMesh file = LoadMesh(s.mesh_path);
+      dem::TriangleMesh file;
+      try {
+        file = LoadMesh(s.mesh_path);
+      } catch (const InputError& e) {
+        // The mesh's own error names only the mesh file: name the URDF and the link as well.
+        throw InputError(urdf, 0, "link '" + s.link + "' <mesh filename>", e.expected(),
+                         s.mesh_path + ": " + e.got());
+      }
       std::vector<Eigen::Vector3d> v;
       for (const dem::Vec3& p : file.vertices)
         v.emplace_back(s.size.x() * p.x, s.size.y() * p.y, s.size.z() * p.z);
@@ -127,7 +134,7 @@ ArmGeometry::ArmGeometry(std::shared_ptr<const arm::ArmModel> model) : model_(st
       bool has_visual = false;
       for (const arm::Shape& s : body.shapes) has_visual |= s.link == frame.link && !s.collision;
       for (const arm::Shape& s : body.shapes)
-        if (s.link == frame.link && s.collision != has_visual) AppendShape(s, &mesh);
+        if (s.link == frame.link && s.collision != has_visual) AppendShape(m.source, s, &mesh);
     }
     if (mesh.triangles.empty()) continue;
     meshes_.push_back(std::move(mesh));

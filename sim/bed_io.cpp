@@ -412,8 +412,13 @@ bool ReadPourPoint(const std::string& path, const std::string& scene_yaml, PourP
                      H5Aclose);
     uint64_t rng = 0;
     CheckOk(H5Aread(attribute.get(), H5T_NATIVE_UINT64, &rng), "H5Aread pour_rng");
-    pour->layers = static_cast<int>(in.ReadDoubleAttribute("/", "pour_layers"));
-    pour->poured = static_cast<int64_t>(in.ReadDoubleAttribute("/", "pour_poured"));
+    // Counts held as doubles: out of range (a file not of ours) they are no keep to go on from
+    // (and casting them would be undefined behaviour).
+    const double layers = in.ReadDoubleAttribute("/", "pour_layers");
+    const double poured = in.ReadDoubleAttribute("/", "pour_poured");
+    if (!(layers >= 0 && layers <= 1e9 && poured >= 0 && poured <= 9e18)) return false;
+    pour->layers = static_cast<int>(layers);
+    pour->poured = static_cast<int64_t>(poured);
     pour->rng = rng;
     pour->layer_t0 = in.ReadDoubleAttribute("/", "pour_layer_t0");
     pour->layer_fall = in.ReadDoubleAttribute("/", "pour_layer_fall");

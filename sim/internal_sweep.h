@@ -46,6 +46,7 @@ class Log {
   std::chrono::steady_clock::time_point t0_;
   double total_ = 0, done_cost_ = 0, skipped_cost_ = 0;
   int finished_ = 0;
+  int failed_ = 0;  // of finished_, those that failed
 };
 
 // Under a launcher (Open MPI's OMPI_COMM_WORLD_SIZE, PMI_SIZE or PMIX_RANK in the environment).

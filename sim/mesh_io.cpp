@@ -101,6 +101,7 @@ dem::TriangleMesh LoadMesh(const std::string& path, double scale) {
     throw InputError(path, 0, "scale", "a finite number > 0 (mesh units to m)", got.str());
   }
   std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) Fail(path, kExpected, "a folder");
   if (!std::filesystem::is_regular_file(path, ec)) Fail(path, kExpected, "no such file");
 
   // Positions only: with normals (flat-shaded STL) or texture coordinates still attached, the

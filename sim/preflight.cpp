@@ -18,6 +18,7 @@
 #include "sim/bed_io.h"
 #include "sim/dig.h"
 #include "sim/scoop_driver.h"
+#include "sim/trajectory.h"
 
 namespace sim {
 namespace {
@@ -217,9 +218,17 @@ FileBed CheckBedFile(Scene* scene) {
   return f;
 }
 
+// The key of a move of the dig's path, as the scene wrote it: "dig.trajectory.moves[4]" or
+// "dig.trajectory.rotation2" (a preset's segment).
+std::string MoveKey(const Move& move) { return "dig.trajectory." + move.name; }
+
 // Step 4: the scoop's size and, pass after pass, its path against the floor and the side walls.
-// The path is sampled at kSamples poses per pass; every vertex of the mesh is placed at each.
-void CheckDigPath(const Scene& scene, double surface, double clear_z, bool estimated) {
+// `surface` is where the path's depth is measured from, `surface_from` the inputs it comes from
+// (for messages). Every vertex of the mesh is placed at poses sampled no further apart than
+// half the smallest sphere's radius at the path's fastest point speed (at least 400 a pass, at
+// most 200,000), so a fast move through a wall and back is not stepped over.
+void CheckDigPath(const Scene& scene, double surface, double clear_z,
+                  const std::string& surface_from) {
   const DigSpec& dig = scene.dig;
   const dem::TriangleMesh& mesh = dig.scoop.geometry;
   dem::Vec3 lo{1e300, 1e300, 1e300}, hi = -1.0 * lo;
@@ -236,17 +245,38 @@ void CheckDigPath(const Scene& scene, double surface, double clear_z, bool estim
                Num(box_size) + " m)",
            Num(dig.scoop.scale, 6), "the scoop would be " + Num(scoop_size) + " m across");
   }
-  const std::string where =
-      estimated ? "the surface estimated from bed.count at z = " + Num(surface) + " m"
-                : "the surface at z = " + Num(surface) + " m";
-  constexpr int kSamples = 400;
+  // The path as written, its move starts resolved (the same times in every pass), and the
+  // fastest any vertex moves along it.
+  const Trajectory path(dig.trajectory);
+  const std::vector<Move>& moves = path.spec().moves;
+  double fastest = 0;
+  for (const Move& m : moves) {
+    if (m.kind == Move::Kind::kTranslate) fastest = std::max(fastest, m.speed);
+    if (m.kind != Move::Kind::kRotate) continue;
+    const dem::Vec3 about = m.about_pivot ? dig.trajectory.pivot_offset : m.point;
+    for (const dem::Vec3& v : mesh.vertices) {
+      const dem::Vec3 d = v - about;
+      fastest = std::max(fastest, m.speed * std::sqrt(dem::Dot(d, d)));
+    }
+  }
+  const double spacing = 0.5 * scene.bed.radius_min;
+  constexpr int kMinSamples = 400, kMaxSamples = 200000;
   BedContext bed{&mesh, surface, clear_z, scene.time_step, 0.0};
   const std::unique_ptr<KinematicDriver> driver = KinematicDriver::ForDig(dig);
   for (int pass = 1; pass <= dig.passes; ++pass) {
     const double duration = driver->BeginPass(pass, bed).duration;
     if (!std::isfinite(duration)) return;  // refused by the step count (Preflight, 3.)
-    for (int k = 0; k <= kSamples; ++k) {
-      const double tau = duration * k / kSamples;
+    const double descent = duration - (path.end_time() - path.start_time());
+    const double samples = std::clamp(fastest > 0 ? std::ceil(duration * fastest / spacing) : 0.0,
+                                      double{kMinSamples}, double{kMaxSamples});
+    const int n = static_cast<int>(samples);
+    // The pass's level: the level scoop's lowest point once the approach is done.
+    const double level = surface - pass * dig.bite_depth;
+    const std::string depth = "pass " + std::to_string(pass) + " cuts " + std::to_string(pass) +
+                              " x dig.bite_depth = " + Num(pass * dig.bite_depth) + " m below " +
+                              surface_from + ", to z = " + Num(level) + " m";
+    for (int k = 0; k <= n; ++k) {
+      const double tau = duration * k / n;
       const dem::Pose pose = driver->MotionAt(tau).pose;
       for (const dem::Vec3& v : mesh.vertices) {
         const dem::Vec3 x = dem::Apply(pose, v);
@@ -258,20 +288,55 @@ void CheckDigPath(const Scene& scene, double surface, double clear_z, bool estim
         const std::string at = "pass " + std::to_string(pass) + " taking the scoop to [" +
                                Num(x.x) + ", " + Num(x.y) + ", " + Num(x.z) + "] m " + Num(tau) +
                                " s into the pass";
+        // The move under way then (none during the descent to the path's start).
+        const double t = tau - descent + path.start_time();
+        const Move* move = nullptr;
+        for (const Move& m : moves)
+          if (tau >= descent && m.start <= t) move = &m;
+        // A move the scene wrote in dig.trajectory.moves is blamed for where it takes the
+        // scoop (the first one places it: dig.trajectory.start, or the pass's depth); a
+        // preset's segments are not the scene's to change.
+        const bool blame_move =
+            move != nullptr && move != &moves.front() && move->name.rfind("moves[", 0) == 0;
         if (below_floor) {
+          if (blame_move && level >= scene.box_min.z) {
+            // The pass's level is above the floor: the move takes the scoop below it.
+            Refuse(scene, MoveKey(*move),
+                   "a move that keeps the scoop above the floor (box.min z = " +
+                       Num(scene.box_min.z) + " m)",
+                   at, depth + "; " + move->name + " goes " + Num(level - x.z) + " m below that");
+          }
           Refuse(scene, "dig.bite_depth",
                  "a path that keeps the scoop above the floor (box.min z = " +
                      Num(scene.box_min.z) + " m)",
-                 at,
-                 "it cuts " + Num(pass * dig.bite_depth) + " m below " + where +
-                     "; lower dig.bite_depth or dig.passes, or raise the bed");
+                 at, depth + "; lower dig.bite_depth or dig.passes, or raise the bed");
         }
-        Refuse(scene, "dig.trajectory.start",
+        Refuse(scene, blame_move ? MoveKey(*move) : "dig.trajectory.start",
                "a path that keeps the scoop inside the side walls below the bed's surface", at,
-               where + "; move dig.trajectory.start or widen the box");
+               surface_from + (blame_move ? "; the move carries the scoop through a side wall"
+                                          : "; move dig.trajectory.start or widen the box"));
       }
     }
   }
+}
+
+// The inputs of the scene's time step, for messages: "time_step.rayleigh_fraction 0.25 x the
+// Rayleigh time (paper eq. 4) of bed.radius 0.008 m, material snow (scenes/materials.yaml:
+// density 300 kg/m^3, shear_modulus ... Pa, poisson ...)".
+std::string TimeStepInputs(const Scene& scene) {
+  const BedSpec& bed = scene.bed;
+  const int index = scene.materials.Find(bed.material);
+  std::string material = bed.material;
+  if (index >= 0) {
+    const dem::Material& m = scene.materials[index];
+    material += " (" + scene.materials_path + ": density " + Num(m.density) +
+                " kg/m^3, shear_modulus " + Num(m.shear_modulus) + " Pa, poisson " +
+                Num(m.poisson) + ")";
+  }
+  return "time_step.rayleigh_fraction " + Num(scene.rayleigh_fraction) +
+         " x the Rayleigh time (paper eq. 4) of " +
+         (bed.clump.empty() ? "bed.radius " : "bed.clump's smallest sphere ") +
+         Num(bed.radius_min) + " m, material " + material;
 }
 
 }  // namespace
@@ -286,6 +351,8 @@ RunForecast Preflight(Scene* scene, Work work) {
     scene->time_step = file.time_step;
   }
   f.time_step = scene->time_step;
+  // `scoopsim bed` pours bed.count whatever bed.file says (LoadScene left it to here).
+  if (work == Work::kBed && !bed.file.empty()) CheckBedFitsTheBox(*scene);
 
   // 2. Memory.
   // In floating point: bed.count x spheres per clump may not fit an int64_t.
@@ -303,7 +370,7 @@ RunForecast Preflight(Scene* scene, Work work) {
            "it would need about " + Bytes(f.bytes) + " at ~" + Bytes(kBytesPerParticle) +
                " per particle");
   }
-  f.particles = static_cast<int64_t>(particles);
+  f.particles = static_cast<int64_t>(std::min(particles, 9e18));  // within the cast's range
 
   // 4 first for a dig (its planned time is needed for 3): the surface and the path.
   const double r_max = bed.radius_max;
@@ -312,34 +379,39 @@ RunForecast Preflight(Scene* scene, Work work) {
     f.surface = bed.settled_height + scene->box_min.z;
     f.surface_estimated = true;
     clear_z = f.surface + 3 * r_max;  // the estimated top of the bed, clear by 2 r_max
+    const dem::Vec3 box = scene->box_max - scene->box_min;
+    std::string surface_from =
+        "the surface at z = " + Num(f.surface) + " m estimated from bed.count " +
+        std::to_string(bed.count) +
+        (bed.clump.empty() ? " spheres of bed.radius " + Num(bed.radius_max)
+                           : " clumps of bed.clump " + bed.clump + " (" + Num(bed.radius_max)) +
+        " m" + (bed.clump.empty() ? "" : ")") + " settled over the box's " + Num(box.x) + " x " +
+        Num(box.y) + " m floor";
     if (from_file) {
       f.surface = file.surface;
       f.surface_estimated = false;
       clear_z = file.top + 2 * r_max;
+      surface_from = "the surface of bed.file " + bed.file + " at z = " + Num(f.surface) + " m";
     }
     if (scene->dig.surface_given) {
       f.surface = scene->dig.surface;
       f.surface_estimated = false;
+      surface_from = "dig.surface (z = " + Num(f.surface) + " m)";
     }
-    CheckDigPath(*scene, f.surface, clear_z, f.surface_estimated);
+    CheckDigPath(*scene, f.surface, clear_z, surface_from);
   }
+
+  // What a pass's driver knows of the bed (a dig's).
+  const BedContext context{&scene->dig.scoop.geometry, f.surface, clear_z, scene->time_step, 0.0};
 
   // 3. Steps: settling (a bed still to be poured) and the run.
   f.simulated = from_file ? 0.0 : bed.settle_max_time;
   std::string time_key = "bed.settle.max_time";
   if (work == Work::kRun) {
     if (scene->dig.enabled) {
-      const BedContext context{&scene->dig.scoop.geometry, f.surface, clear_z, scene->time_step,
-                               0.0};
       const std::unique_ptr<KinematicDriver> driver = KinematicDriver::ForDig(scene->dig);
       for (int pass = 1; pass <= scene->dig.passes; ++pass)
         f.simulated += driver->PlannedDuration(pass, context);
-      // The arm's plan of each pass (IK): a path out of its reach is refused here, before any
-      // work (ArmDriver throws InputError naming arm.base).
-      if (scene->arm.enabled && !scene->arm.table_driven && scene->arm.model) {
-        ArmDriver arm(*scene, /*announce=*/false);
-        for (int pass = 1; pass <= scene->dig.passes; ++pass) arm.PlannedDuration(pass, context);
-      }
       time_key = "dig";
     } else {
       f.simulated += scene->duration;
@@ -353,12 +425,23 @@ RunForecast Preflight(Scene* scene, Work work) {
     const bool blame_step = usual_steps <= kMaxSteps;
     const std::string key = blame_step ? "time_step.rayleigh_fraction" : time_key;
     const bool finite = std::isfinite(f.steps);
+    // The step's own inputs named (a bed file's smallest sphere may set it lower).
+    const std::string step = "steps of " + Num(f.time_step) + " s (" +
+                             (from_file ? "at most " : "") + TimeStepInputs(*scene) + ")";
     Refuse(*scene, key, "a run of at most " + Num(kMaxSteps) + " steps",
            blame_step ? Num(scene->rayleigh_fraction, 6)
                       : (finite ? Num(f.simulated) + " s simulated" : "a run without an end"),
-           finite ? "about " + Num(f.steps) + " steps of " + Num(f.time_step) + " s for " +
-                        Num(f.simulated) + " s simulated: the run could never end"
+           finite ? "about " + Num(f.steps) + " " + step + " for " + Num(f.simulated) +
+                        " s simulated: the run could never end"
                   : "its planned time has no end");
+  }
+  // The arm's plan of each pass (IK), once the run's length is known to be sane (its path is
+  // sampled every 10 ms): a path out of its reach is refused here, before any work (ArmDriver
+  // throws InputError naming arm.base).
+  if (work == Work::kRun && scene->dig.enabled && scene->arm.enabled && !scene->arm.table_driven &&
+      scene->arm.model) {
+    ArmDriver arm(*scene, /*announce=*/false);
+    for (int pass = 1; pass <= scene->dig.passes; ++pass) arm.PlannedDuration(pass, context);
   }
   return f;
 }

@@ -9,7 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -38,6 +38,8 @@ constexpr double kMaxRayleighFraction = 0.3;  // DEM practice: dt in 0.2..0.3 t_
 // (journal sections 8 and 13: k dt = 7.4e-5 s already gave transients).
 constexpr double kMaxArmStepExplicitD = 1e-4;
 constexpr double kMaxArmStepImplicitD = 2.5e-3;
+// The solid fraction of a settled bed, for the height of a bed still to be poured.
+constexpr double kSettledSolidFraction = 0.59;
 
 // A double with 6 significant digits, for messages.
 std::string Num(double v) {
@@ -48,7 +50,10 @@ std::string Num(double v) {
 }
 
 // A whole number held in a double, for messages.
-std::string Int(double v) { return std::to_string(static_cast<long long>(v)); }
+std::string Int(double v) {
+  // A double past long long's range would overflow the cast (undefined behaviour).
+  return std::fabs(v) < 9e18 ? std::to_string(static_cast<long long>(v)) : Num(v);
+}
 
 using yaml_input::LineOf;
 
@@ -355,7 +360,10 @@ void ParseMaterials(const std::string& file, const YAML::Node& root, dem::Materi
                       {"density", "shear_modulus", "poisson", "source", "notes"});
     dem::Material material;
     material.name = name;
-    material.density = m.Number("density", "a number > 0 (solid density, kg/m^3)", Positive);
+    // Solid grains: osmium, the densest element, is 22590 kg/m^3; a density far below 1 makes
+    // the time step (paper eq. 4) vanish and the run never end.
+    material.density = m.Number("density", "a number in [1, 1e5] (solid density, kg/m^3)",
+                                [](double v) { return v >= 1 && v <= 1e5; });
     material.shear_modulus =
         m.Number("shear_modulus", "a number > 0 (shear modulus G, Pa)", Positive);
     material.poisson = m.Number("poisson", "a number in [0, 0.5) (Poisson's ratio)",
@@ -1130,7 +1138,19 @@ int SceneLine(const Scene& scene, const std::string& key) {
   int line = 1;
   for (size_t begin = 0; begin <= key.size() && node.IsMap();) {
     const size_t dot = std::min(key.find('.', begin), key.size());
-    const YAML::Node child = node[key.substr(begin, dot - begin)];
+    // "moves[4]": item 4 of the list `moves`.
+    std::string name = key.substr(begin, dot - begin);
+    long item = -1;
+    const size_t bracket = name.find('[');
+    if (bracket != std::string::npos) {
+      item = std::strtol(name.c_str() + bracket + 1, nullptr, 10);
+      name.resize(bracket);
+    }
+    YAML::Node child = node[name];
+    if (child && item >= 0) {
+      if (!child.IsSequence() || static_cast<size_t>(item) >= child.size()) break;
+      child.reset(child[static_cast<size_t>(item)]);
+    }
     if (!child) break;
     line = LineOf(child);
     node.reset(child);
@@ -1143,6 +1163,25 @@ std::vector<std::string> BuiltinClumpNames() {
   std::vector<std::string> names;
   for (const dem::ClumpTemplate& t : dem::TetrahedronTemplates()) names.push_back(t.name);
   return names;
+}
+
+void CheckBedFitsTheBox(const Scene& scene) {
+  const BedSpec& spec = scene.bed;
+  const dem::Vec3 extent = scene.box_max - scene.box_min;
+  if (!(spec.settled_height > extent.z)) return;
+  const bool clumps = !spec.clump.empty();
+  const double mean_volume =
+      clumps ? spec.clump_volume : MeanSphereVolume(spec.radius_min, spec.radius_max);
+  const double max_count =
+      std::floor(kSettledSolidFraction * extent.x * extent.y * extent.z / mean_volume);
+  const std::string what = clumps ? " clumps of bed.clump " + spec.clump
+                                  : " spheres of bed.radius " + Num(spec.radius_max) + " m";
+  Fail(scene.path, SceneLine(scene, "bed.count"), "bed.count",
+       "a bed that fits the box: at most " + Int(max_count) + what + " settle below its " +
+           Num(extent.z) + " m height at a solid fraction of ~0.59",
+       std::to_string(spec.count),
+       "the settled bed would be " + Num(spec.settled_height) +
+           " m high; raise box.max z or lower bed.count");
 }
 
 Scene WithClumpBed(const Scene& scene, const dem::ClumpTemplate& t) {
@@ -1256,17 +1295,21 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
     }
     SetBedClump(&spec, *t);
   } else {
-    const std::string expected = "a number > 0 or a range [rmin, rmax] with 0 < rmin <= rmax (m)";
+    // At least 1 um: below it a cohesionless DEM sphere means nothing, and the time step (paper
+    // eq. 4, proportional to the radius) and the box's insertion cells run away.
+    const std::string expected =
+        "a number >= 1e-6 or a range [rmin, rmax] with 1e-6 <= rmin <= rmax (m)";
+    const auto at_least_1um = [](double v) { return v >= 1e-6; };
     const YAML::Node r = bed.Need("radius", expected);
     if (r.IsSequence()) {
       if (r.size() != 2) Fail(path, LineOf(r), "bed.radius", expected, Describe(r));
-      spec.radius_min = bed.CheckNumber(r[0], "bed.radius", expected, Positive, &r);
-      spec.radius_max = bed.CheckNumber(r[1], "bed.radius", expected, Positive, &r);
+      spec.radius_min = bed.CheckNumber(r[0], "bed.radius", expected, at_least_1um, &r);
+      spec.radius_max = bed.CheckNumber(r[1], "bed.radius", expected, at_least_1um, &r);
       if (spec.radius_min > spec.radius_max) {
         Fail(path, LineOf(r), "bed.radius", expected, Describe(r), "range reversed");
       }
     } else {
-      spec.radius_min = spec.radius_max = bed.CheckNumber(r, "bed.radius", expected, Positive);
+      spec.radius_min = spec.radius_max = bed.CheckNumber(r, "bed.radius", expected, at_least_1um);
     }
   }
   spec.count = bed.Integer("count", "an integer > 0", [](int64_t v) { return v > 0; });
@@ -1336,7 +1379,6 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
   // pitch a = max(cbrt(mean sphere volume / fill_fraction), 2 rmax) above the bed so far
   // (dem/insertion.h), so the box must hold one lattice cell in every direction and the settled
   // bed, at a solid fraction of about 0.59, must lie below the box's top.
-  constexpr double kSettledSolidFraction = 0.59;
   // Clumps are poured as their bounding spheres at a solid fraction of clumps of fill_fraction
   // (sim/bed.cpp): the same pitch with the clump's volume and bounding radius.
   const dem::Vec3 extent = scene.box_max - scene.box_min;
@@ -1345,26 +1387,35 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
       clumps ? spec.clump_volume : MeanSphereVolume(spec.radius_min, spec.radius_max);
   const double pitch =
       std::max(std::cbrt(mean_volume / spec.fill_fraction), 2.0 * spec.radius_max * (1.0 + 1e-9));
+  const std::string size =
+      "a box of " + Num(extent.x) + " x " + Num(extent.y) + " x " + Num(extent.z) + " m";
+  const std::string cell_of =
+      std::string(clumps ? "bed.clump" : "bed.radius") + " at bed.fill_fraction";
   if (std::min({extent.x, extent.y, extent.z}) < pitch) {
     Fail(path, LineOf(box_node["max"]), "box.max",
-         "a box at least " + Num(pitch) + " m along x, y and z (one insertion cell for " +
-             (clumps ? "bed.clump" : "bed.radius") + " at bed.fill_fraction)",
-         "a box of " + Num(extent.x) + " x " + Num(extent.y) + " x " + Num(extent.z) + " m");
+         "a box at least " + Num(pitch) + " m along x, y and z (one insertion cell for " + cell_of +
+             ")",
+         size);
+  }
+  // The pour's lattice holds a layer of insertion cells (4 bytes each) and counts them along
+  // each axis in int: a layer of at most max(1e8, 4 x bed.count) cells (the neighbour grid's
+  // bound) and at most 1e9 cells along any axis. A 1e10 m box overflowed the casts (undefined
+  // behaviour) and then the memory.
+  const double cells_x = std::floor(extent.x / pitch), cells_y = std::floor(extent.y / pitch);
+  const double max_layer = std::max(1e8, 4.0 * static_cast<double>(spec.count));
+  if (!(cells_x * cells_y <= max_layer && std::max({cells_x, cells_y, extent.z / pitch}) <= 1e9)) {
+    Fail(path, LineOf(box_node["max"]), "box.max",
+         "a box of at most " + Num(max_layer) +
+             " insertion cells a layer (max(1e8, 4 x bed.count)) and 1e9 along any axis (cells "
+             "of " +
+             Num(pitch) + " m: " + cell_of + ")",
+         size,
+         Num(cells_x * cells_y) + " cells a layer, " + Num(std::max(cells_x, cells_y)) +
+             " along the floor, " + Num(extent.z / pitch) + " up");
   }
   const double floor_area = extent.x * extent.y;
-  const double settled_height =
+  spec.settled_height =
       static_cast<double>(spec.count) * mean_volume / (kSettledSolidFraction * floor_area);
-  spec.settled_height = settled_height;
-  if (settled_height > extent.z) {
-    const double max_count =
-        std::floor(kSettledSolidFraction * floor_area * extent.z / mean_volume);
-    Fail(path, LineOf(bed_node["count"]), "bed.count",
-         "a bed that fits the box: at most " + Int(max_count) + (clumps ? " clumps" : " spheres") +
-             " settle below its " + Num(extent.z) + " m height at a solid fraction of ~0.59",
-         std::to_string(spec.count),
-         "the settled bed would be " + Num(settled_height) +
-             " m high; raise box.max z or lower bed.count");
-  }
 
   // Neighbour search skin; default a quarter of the smallest diameter (DeriveFromBed).
   if (top.Has("neighbor")) {
@@ -1396,6 +1447,9 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
                                    [](int64_t v) { return v >= 0 && v <= 4096; }));
 
   if (top.Has("dig")) ParseDig(path, root["dig"], bed_material, &scene);
+  // A bed still to be poured must fit the box; with bed.file the run loads the file instead
+  // (`scoopsim bed` checks it in Preflight), whose radii are then checked against bed.radius.
+  if (spec.file.empty()) CheckBedFitsTheBox(scene);
   if (top.Has("sleep")) ParseSleep(path, root["sleep"], &scene.sleep);
   if (top.Has("health")) {
     // The overlap that stops a run as unstable. A clump's small spheres carry the whole clump's
@@ -1419,6 +1473,19 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
 
   // Derived time step and default skin.
   DeriveFromBed(&scene);
+
+  // Legal but almost surely wrong: warnings, not refusals.
+  if (dem::Dot(scene.gravity, scene.gravity) == 0) {
+    scene.warnings.push_back(path + ":" + std::to_string(LineOf(root["gravity"])) +
+                             ": gravity: [0, 0, 0] m/s^2: nothing will settle and the bed will "
+                             "not resist the scoop (the paper's is [0, 0, -1.3])");
+  }
+  if (scene.dig.surface_given && scene.dig.surface > scene.box_max.z) {
+    scene.warnings.push_back(path + ":" + std::to_string(LineOf(root["dig"]["surface"])) +
+                             ": dig.surface: " + Num(scene.dig.surface) +
+                             " m is above the box's open top (box.max z = " + Num(scene.box_max.z) +
+                             " m): no bed stands there, the scoop will dig air");
+  }
   // The arm's step: below the explicit D term's bound; on a table, at most the lander's control
   // step; coupled, below the wrench lag's bound.
   if (scene.arm.enabled) {
@@ -1444,10 +1511,10 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
            std::to_string(scene.arm.substeps), why);
     }
   }
-  // Warnings (a bare angle that looks like radians): kept with the scene, one line each on stderr.
-  scene.warnings = yaml_input::TakeWarnings();
-  for (const std::string& w : scene.warnings)
-    std::fprintf(stderr, "scoopsim: warning: %s\n", w.c_str());
+  // The reading's warnings (a bare angle that looks like radians) go before the checks' own; the
+  // CLI prints them (PrintWarnings in tools/main.cpp), once per command, not per load.
+  std::vector<std::string> read_warnings = yaml_input::TakeWarnings();
+  scene.warnings.insert(scene.warnings.begin(), read_warnings.begin(), read_warnings.end());
   return scene;
 }
 

@@ -216,8 +216,9 @@ struct Scene {
   RenderSpec render;
   std::vector<ObstacleSpec> obstacles;  // key obstacles
   ArmSpec arm;                          // key arm
-  // Warnings of the load, one line each ("FILE:LINE: KEY: ..."; LoadScene also prints them):
-  // a bare angle that looks like radians (angles: degrees, or "90 deg", "1.5708 rad").
+  // Warnings of the load, one line each ("FILE:LINE: KEY: ..."; the CLI prints them): values that
+  // are legal but almost surely wrong (zero gravity, a dig surface far above the box, a bare angle
+  // that looks like radians: angles are degrees, or "90 deg", "1.5708 rad").
   std::vector<std::string> warnings;
 };
 
@@ -238,6 +239,12 @@ InputError NamingSet(const InputError& error, const std::vector<std::string>& se
 // The 1-based line of the dotted key `key` ("bed.radius", "dig.scoop.scale") in the scene's text,
 // or of its nearest parent there; 1 when none. For errors found after LoadScene (sim/preflight.h).
 int SceneLine(const Scene& scene, const std::string& key);
+
+// Refuses (InputError at bed.count) a bed that would not fit the box once settled: bed.count
+// spheres or clumps at a solid fraction of ~0.59 must lie below the box's top. LoadScene checks
+// it for a bed still to be poured; Preflight for `scoopsim bed` of a scene that names a bed.file
+// (a run loads the file, whose own radii and count are checked instead).
+void CheckBedFitsTheBox(const Scene& scene);
 
 // The built-in clump templates' names (dem::TetrahedronTemplates), in order.
 std::vector<std::string> BuiltinClumpNames();

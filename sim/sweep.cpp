@@ -55,6 +55,9 @@ std::string YamlText(const YAML::Node& node) {
   return e.c_str();
 }
 
+// The most cases a sweep file may make (the largest shipped, lookup.yaml, has 40).
+constexpr int kMaxCases = 100000;
+
 [[noreturn]] void Fail(const std::string& file, const YAML::Node& node, const std::string& key,
                        const std::string& expected, const std::string& got,
                        const std::string& note = "") {
@@ -357,6 +360,18 @@ Sweep LoadSweep(const std::string& path) {
     std::vector<Variable> variables;
     for (auto it = grid.begin(); it != grid.end(); ++it)
       variables.push_back(ReadVariable(path, "grid", it->first, it->second));
+    // Counted before they are made: a grid of 1e12 cases died of std::bad_alloc after 23 s.
+    double count = 1;
+    std::string product;
+    for (const Variable& v : variables) {
+      count *= static_cast<double>(v.choices.size());
+      product += (product.empty() ? "" : " x ") + std::to_string(v.choices.size());
+    }
+    if (count > kMaxCases) {
+      std::ostringstream got;
+      got << count << " cases (" << product << " values)";
+      Fail(path, grid, "grid", "at most " + std::to_string(kMaxCases) + " cases", got.str());
+    }
     std::vector<size_t> at(variables.size(), 0);
     for (;;) {
       Draft d;
@@ -1066,6 +1081,7 @@ void Log::Finished(const SweepCase& c, int rank, const CaseOutcome& outcome) {
   }
   done_cost_ += c.estimate;
   ++finished_;
+  if (outcome.exit_status != kExitOk) ++failed_;
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
   const double left = total_ - done_cost_ - skipped_cost_;
@@ -1075,10 +1091,11 @@ void Log::Finished(const SweepCase& c, int rank, const CaseOutcome& outcome) {
   if (left <= 0) std::snprintf(eta, sizeof eta, "0 s");
   const std::string resumed =
       outcome.first_pass > 1 ? " (resumed at pass " + std::to_string(outcome.first_pass) + ")" : "";
-  Status("scoopsim: sweep: [%d/%zu] %s %s in %.1f s%s (rank %d); %d of %zu finished, ETA %s\n",
+  const std::string failed = failed_ > 0 ? " (" + std::to_string(failed_) + " FAILED)" : "";
+  Status("scoopsim: sweep: [%d/%zu] %s %s in %.1f s%s (rank %d); %d of %zu finished%s, ETA %s\n",
          c.index, sweep_.cases.size(), c.name.c_str(),
          outcome.exit_status == kExitOk ? "done" : "FAILED", outcome.wall, resumed.c_str(), rank,
-         finished_, sweep_.cases.size(), eta);
+         finished_, sweep_.cases.size(), failed.c_str(), eta);
 }
 
 int FinishTable(const Sweep& sweep, const SweepOptions& options) {
@@ -1110,6 +1127,26 @@ int RunSweep(const Sweep& sweep, const SweepOptions& options) {
                      std::to_string(sweep.cases.size() - 1) + " (" + sweep.path + " has " +
                      std::to_string(sweep.cases.size()) + " cases), got " +
                      std::to_string(options.only_case));
+  }
+  // The output folder is writable: else every case would fail alike, one after the other.
+  {
+    const fs::path cases = fs::path(options.dir) / "cases";
+    std::error_code ec;
+    fs::create_directories(cases, ec);
+    const fs::path probe = cases / (".write_probe_" + std::to_string(::getpid()));
+    if (!ec) {
+      const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+      if (fd < 0) ec = std::error_code(errno, std::generic_category());
+      if (fd >= 0) {
+        ::close(fd);
+        fs::remove(probe, ec);
+      }
+    }
+    if (ec) {
+      throw InputError("-o " + options.dir +
+                       ": expected an output folder scoopsim can write, got " + ec.message() +
+                       " (" + cases.string() + ")");
+    }
   }
   if (options.only_case < 0 && sweep::LaunchedByMpi()) return sweep::RunMpi(sweep, options);
   sweep::Log log(sweep);

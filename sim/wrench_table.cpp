@@ -278,8 +278,18 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
   const std::vector<double> depths(depth_set.begin(), depth_set.end());
   std::vector<int> passes;
   for (int p = 1; p <= max_pass; ++p) passes.push_back(p);
-  const int n_rho =
-      static_cast<int>(std::floor(options.rho_max_mm / options.rho_step_mm + 1e-9)) + 1;
+  // The rho grid's points, counted in double first: past an int they overflowed the cast.
+  constexpr double kMaxRhoPoints = 1e7;
+  const double rho_points = std::floor(options.rho_max_mm / options.rho_step_mm + 1e-9) + 1;
+  if (!(rho_points <= kMaxRhoPoints)) {
+    char got[64];
+    std::snprintf(got, sizeof got, "%.3g", rho_points);
+    throw InputError(
+        "--rho-max-mm / --rho-step-mm: expected a rho grid of at most 1e+07 points, "
+        "got " +
+        std::string(got));
+  }
+  const int n_rho = static_cast<int>(rho_points);
   std::vector<double> rho(n_rho);
   for (int k = 0; k < n_rho; ++k) rho[k] = k * options.rho_step_mm / 1e3;
 

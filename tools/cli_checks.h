@@ -17,7 +17,7 @@ inline CLI::Validator FiniteNumber(bool zero_ok, const std::string& unit = "") {
         double v = 0;
         if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v < 0 ||
             (!zero_ok && v == 0))
-          return "expected " + what + ", got " + text;
+          return "expected " + what + ", got " + (text.empty() ? "''" : text);
         return "";
       },
       zero_ok ? "NUMBER >= 0" : "NUMBER > 0");
@@ -27,6 +27,20 @@ inline CLI::Validator FinitePositive(const std::string& unit = "") {
 }
 inline CLI::Validator FiniteNonNegative(const std::string& unit = "") {
   return FiniteNumber(true, unit);
+}
+
+// A finite number in [lo, hi], `unit` named in the message.
+inline CLI::Validator FiniteInRange(double lo, double hi, const std::string& unit) {
+  const std::string what = "a finite number in [" + CLI::detail::to_string(lo) + ", " +
+                           CLI::detail::to_string(hi) + "] (" + unit + ")";
+  return CLI::Validator(
+      [what, lo, hi](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !(v >= lo && v <= hi))
+          return "expected " + what + ", got " + (text.empty() ? "''" : text);
+        return "";
+      },
+      "NUMBER");
 }
 
 // A whole number >= 0.

@@ -237,6 +237,37 @@ struct FramesArgs {
   }
 };
 
+// CLI11 reads an unknown command as a missing one ("A subcommand is required"): the command
+// words of argv are checked first, each against the commands of the one before it. Returns the
+// refusal's line, or "" when every word is a known command (options are CLI11's to judge).
+std::string UnknownCommand(CLI::App* app, int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') return "";
+    const std::vector<CLI::App*> commands = app->get_subcommands([](CLI::App*) { return true; });
+    if (commands.empty()) return "";  // the command's own arguments follow
+    std::string names;
+    CLI::App* next = nullptr;
+    for (CLI::App* c : commands) {
+      names += (names.empty() ? "" : ", ") + c->get_name();
+      if (c->check_name(word)) next = c;
+    }
+    if (next == nullptr) {
+      const std::string where = app->get_parent() == nullptr ? "" : app->get_name() + " ";
+      return "scoopsim: " + where + "COMMAND: expected one of " + names + ", got '" +
+             OneLine(word) + "' (see --help)";
+    }
+    app = next;
+  }
+  return "";
+}
+
+// The scene's warnings (sim::Scene::warnings), one line each on stderr.
+void PrintWarnings(const sim::Scene& scene) {
+  for (const std::string& w : scene.warnings)
+    std::fprintf(stderr, "scoopsim: warning: %s\n", OneLine(w).c_str());
+}
+
 // Logical cores, for LP_NUM_THREADS when the run uses all of them.
 int AllCores() {
   const unsigned n = std::thread::hardware_concurrency();
@@ -374,7 +405,8 @@ int Main(int argc, char** argv) {
   size->add_option("--sizes", size_options.sizes_mm,
                    "Diameters [mm], comma separated (default: the study's eq. 5, "
                    "2,2.5,3.25,4,5.25,6.5,8.25,10)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(tools::FinitePositive("mm"));  // each diameter as written ('' was read as 0)
   size->add_option("--beds", size_options.beds, "Independent beds (seeds) per size")
       ->capture_default_str();
   size->add_option("--smooth-s", size_options.smooth_s,
@@ -472,8 +504,12 @@ int Main(int argc, char** argv) {
   arm_info->add_option("URDF", arm_urdf, "The arm's URDF, e.g. assets/lander_arm.urdf")->required();
   arm_info->add_option("--gravity", arm_gravity, "Gravity [m/s^2] along -z of the base link")
       ->capture_default_str()
-      ->check(tools::FiniteNonNegative("m/s^2"));
+      ->check(tools::FiniteInRange(0, 1000, "m/s^2"));  // past it the torques overflow
 
+  if (const std::string unknown = UnknownCommand(&app, argc, argv); !unknown.empty()) {
+    std::fprintf(stderr, "%s\n", unknown.c_str());
+    return kExitInput;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -485,6 +521,7 @@ int Main(int argc, char** argv) {
     if (*bed) {
       sim::Scene scene = sim::LoadScene(bed_args.scene, bed_args.sets);
       sim::Preflight(&scene, sim::Work::kBed);
+      PrintWarnings(scene);
       return sim::MakeBed(scene, bed_args.Options(scene));
     }
     if (*run) {
@@ -505,6 +542,7 @@ int Main(int argc, char** argv) {
             return sim::LoadSceneText(c.scene_path, c.scene_yaml);
           }();
       sim::Preflight(&scene, sim::Work::kRun);
+      PrintWarnings(scene);
       sim::RunOptions options = run_args.Options(scene);
       options.stop_after = run_stop_after;
       options.checkpoint_every = run_checkpoint_every;
@@ -514,6 +552,15 @@ int Main(int argc, char** argv) {
       }
       std::unique_ptr<render::FrameSequence> frames;
       if (!run_frames.dir.empty()) {
+        // The frames' folder would be made where the output goes ("Is a directory").
+        std::error_code ec;
+        const std::filesystem::path frames_at =
+            std::filesystem::weakly_canonical(run_frames.dir, ec);
+        if (!ec && frames_at == std::filesystem::weakly_canonical(options.output, ec)) {
+          throw sim::InputError("--frames " + run_frames.dir +
+                                ": expected a folder other than the output file (-o " +
+                                options.output + ")");
+        }
         // Checked before the renderer is made (an OpenGL context): at most a frame a step, a
         // spacing below the time step is a typo (1e-300 for 1e-3).
         options.frame_every = run_frames.every > 0 ? run_frames.every : scene.render.every;
@@ -551,6 +598,7 @@ int Main(int argc, char** argv) {
     if (*check) {
       sim::Scene scene = sim::LoadScene(check_scene, check_sets);
       const sim::RunForecast f = sim::Preflight(&scene, sim::Work::kRun);
+      PrintWarnings(scene);
       std::printf(
           "%s: ok: %lld particles, time step %.4g s, %.4g s simulated in about %.3g "
           "steps, about %.3g MB of memory\n",

@@ -1,10 +1,11 @@
 // A seeded mutation fuzzer of the scene loader and the bed loader (issue 22: "every outcome is a
-// clean exit with a known status, never a signal or a hang"). Each case mutates a good dig scene
-// or the bed file it names and runs `scoopsim check SCENE` (LoadScene, then Preflight, which reads
-// the bed file: everything `run` does before its first step) under `timeout`. Every case must exit
-// 0 (accepted) or 2 (refused, with exactly one line on stderr), with no sanitizer report; the test
-// prints the table of outcomes. The seed is fixed, so a failure replays: the case's scene, bed
-// and stderr are kept in the test's folder under its number.
+// clean exit with a known status, never a signal or a hang"), and of the URDF and sweep file
+// readers (issue 42). Each scene case mutates a good dig scene or the bed file it names and runs
+// `scoopsim check SCENE` (LoadScene, then Preflight, which reads the bed file: everything `run`
+// does before its first step) under `timeout`. Every case must exit 0 (accepted) or 2 (refused,
+// with exactly one line on stderr), with no sanitizer report; the test prints the table of
+// outcomes. The seed is fixed, so a failure replays: the case's scene, bed and stderr are kept in
+// the test's folder under its number.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <sys/wait.h>
@@ -54,8 +55,13 @@ class Fuzz {
   uint64_t Below(uint64_t n) { return rng_() % n; }
 
   // The good scene with 1 to 3 mutations of its text.
-  std::string MutateScene() {
-    std::string text = scene_;
+  std::string MutateScene() { return MutateText(scene_); }
+
+  // `good` (a scene, a sweep file, a URDF) with 1 to 3 mutations of its text: a value replaced by
+  // a bad token, a line deleted, doubled or swapped, a character replaced by YAML or XML syntax,
+  // the text cut short.
+  std::string MutateText(const std::string& good) {
+    std::string text = good;
     for (uint64_t k = 0, n = 1 + Below(3); k < n; ++k) {
       std::vector<std::string> lines;
       std::istringstream in(text);
@@ -63,13 +69,13 @@ class Fuzz {
       if (lines.empty()) break;
       const size_t at = Below(lines.size());
       switch (Below(6)) {
-        case 0: {  // a number (or the value after a colon) replaced by a bad token
+        case 0: {  // a number (or the value after a colon or '="') replaced by a bad token
           std::string& line = lines[at];
-          const size_t start = line.find_first_of("0123456789:");
+          const size_t start = line.find_first_of("0123456789:\"");
           if (start == std::string::npos) break;
-          size_t begin = line[start] == ':' ? start + 2 : start;
+          size_t begin = line[start] == ':' ? start + 2 : (line[start] == '"' ? start + 1 : start);
           begin = std::min(begin, line.size());
-          const size_t end = std::min(line.find_first_of(",]}", begin), line.size());
+          const size_t end = std::min(line.find_first_of(",]}\" ", begin), line.size());
           line.replace(begin, end - begin, kBadTokens[Below(std::size(kBadTokens))]);
           break;
         }
@@ -81,7 +87,7 @@ class Fuzz {
           break;
         case 3: {  // a character replaced by YAML syntax
           std::string& line = lines[at];
-          const char syntax[] = ":[]{}-,#&*!|>'\"%@` \t";
+          const char syntax[] = ":[]{}-,#&*!|>'\"%@` \t<>/=";
           if (!line.empty()) line[Below(line.size())] = syntax[Below(sizeof syntax - 1)];
           break;
         }
@@ -135,12 +141,20 @@ class Fuzz {
   // the signal, 124 for a hang. Sets *one_line to whether stderr holds one "scoopsim: " line and
   // *clean to whether it holds no sanitizer report.
   int Check(int index, const std::string& scene_text, bool* one_line, bool* clean) {
-    const fs::path scene = dir_ / ("case_" + std::to_string(index) + ".yaml");
+    return Run(index, scene_text, ".yaml", "check FILE", one_line, clean);
+  }
+
+  // Runs `scoopsim COMMAND`, FILE in `command` replaced by a file of `text` (named with
+  // `extension`), as Check does.
+  int Run(int index, const std::string& input, const std::string& extension,
+          const std::string& command_line, bool* one_line, bool* clean) {
+    const fs::path scene = dir_ / ("case_" + std::to_string(index) + extension);
     const fs::path err = dir_ / ("case_" + std::to_string(index) + ".err");
-    WriteText(scene, scene_text);
-    const std::string command = "timeout -s KILL 60 '" + std::string(SCOOPSIM_BINARY) +
-                                "' check '" + scene.string() + "' >/dev/null 2>'" + err.string() +
-                                "'";
+    WriteText(scene, input);
+    std::string args = command_line;
+    args.replace(args.find("FILE"), 4, "'" + scene.string() + "'");
+    const std::string command = "timeout -s KILL 60 '" + std::string(SCOOPSIM_BINARY) + "' " +
+                                args + " >/dev/null 2>'" + err.string() + "'";
     const int raw = std::system(command.c_str());
     int status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
     if (status == 137) status = 124;  // killed by timeout
@@ -166,6 +180,16 @@ class Fuzz {
   std::string scene_;
 };
 
+// Case `k` exited 0, or 2 with one line; no sanitizer report either way.
+void ExpectCleanOutcome(int k, int status, bool one_line, bool clean, const fs::path& dir) {
+  EXPECT_TRUE(status == 0 || status == 2)
+      << "case " << k << ": status " << status << " (124: hang, > 128: signal); see " << dir;
+  if (status == 2) {
+    EXPECT_TRUE(one_line) << "case " << k << ": not one line; see " << dir;
+  }
+  EXPECT_TRUE(clean) << "case " << k << ": a sanitizer report; see " << dir;
+}
+
 TEST(InputFuzzTest, EveryMutationExitsCleanlyWithAKnownStatus) {
   Fuzz fuzz;
   const auto t0 = std::chrono::steady_clock::now();
@@ -185,12 +209,7 @@ TEST(InputFuzzTest, EveryMutationExitsCleanlyWithAKnownStatus) {
     bool one_line = false, clean = false;
     const int status = fuzz.Check(k, text, &one_line, &clean);
     ++table[scene_case ? "scene" : "bed"][status];
-    EXPECT_TRUE(status == 0 || status == 2) << "case " << k << ": status " << status
-                                            << " (124: hang, > 128: signal); see " << fuzz.dir();
-    if (status == 2) {
-      EXPECT_TRUE(one_line) << "case " << k << ": not one line; see " << fuzz.dir();
-    }
-    EXPECT_TRUE(clean) << "case " << k << ": a sanitizer report; see " << fuzz.dir();
+    ExpectCleanOutcome(k, status, one_line, clean, fuzz.dir());
     if (!scene_case && status != 2 && status != 0) continue;
     if (!scene_case) fs::remove(fuzz.dir() / ("bed_" + std::to_string(k) + ".h5"));
   }
@@ -205,6 +224,41 @@ TEST(InputFuzzTest, EveryMutationExitsCleanlyWithAKnownStatus) {
   EXPECT_GT(table["scene"][0], 0);
   EXPECT_GT(table["scene"][2], 0);
   EXPECT_GT(table["bed"][2], 0);
+}
+
+// The same for the other inputs a user writes (issue 42): URDFs (the lander's arm, mutated, read
+// by `scoopsim arm info`) and sweep files (scenes/sweeps/tiny.yaml, mutated, its cases made and
+// checked by `scoopsim sweep --list`, which runs none). Every case exits 0 or 2 with one line.
+TEST(InputFuzzTest, EveryUrdfAndSweepMutationExitsCleanlyWithAKnownStatus) {
+  Fuzz fuzz;
+  const std::string source = SCOOPSIM_SOURCE_DIR;
+  const std::string urdf = scoopsim_test::ReadText(source + "/assets/lander_arm.urdf");
+  // The URDF names its mesh relative to its folder: a copy of the scoop beside the cases.
+  fs::copy_file(source + "/assets/scoop.stl", fuzz.dir() / "scoop.stl");
+  std::string sweep = scoopsim_test::ReadText(source + "/scenes/sweeps/tiny.yaml");
+  sweep.replace(sweep.find("scene: tiny_scene.yaml"), 22,
+                "scene: " + source + "/scenes/sweeps/tiny_scene.yaml");
+  constexpr int kUrdfCases = 100, kSweepCases = 40;
+  std::map<std::string, std::map<int, int>> table;  // input -> status -> cases
+  for (int k = 0; k < kUrdfCases + kSweepCases; ++k) {
+    const bool urdf_case = k < kUrdfCases;
+    bool one_line = false, clean = false;
+    const std::string list = "sweep FILE --list -o '" + (fuzz.dir() / "sweep_out").string() + "'";
+    const int status =
+        urdf_case ? fuzz.Run(k, fuzz.MutateText(urdf), ".urdf", "arm info FILE", &one_line, &clean)
+                  : fuzz.Run(k, fuzz.MutateText(sweep), ".yaml", list, &one_line, &clean);
+    ++table[urdf_case ? "urdf" : "sweep"][status];
+    ExpectCleanOutcome(k, status, one_line, clean, fuzz.dir());
+  }
+  std::printf("input fuzz (seed %llu): %d URDF + %d sweep mutations\n",
+              static_cast<unsigned long long>(kSeed), kUrdfCases, kSweepCases);
+  for (const auto& [input, counts] : table)
+    for (const auto& [status, n] : counts)
+      std::printf("  %-5s exit %3d: %d\n", input.c_str(), status, n);
+  EXPECT_GT(table["urdf"][0], 0);
+  EXPECT_GT(table["urdf"][2], 0);
+  EXPECT_GT(table["sweep"][0], 0);
+  EXPECT_GT(table["sweep"][2], 0);
 }
 
 }  // namespace

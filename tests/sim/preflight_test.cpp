@@ -250,12 +250,18 @@ TEST(PreflightTest, DigPathIntoTheFloorOrThroughAWallIsRefusedAtLoad) {
       Refusal(WriteScene("floor.yaml", "floor.h5", "bite_depth: 0.02", "bite_depth: 0.12"));
   EXPECT_EQ(measured.key(), "dig.bite_depth");
   EXPECT_EQ(measured.expected(), "a path that keeps the scoop above the floor (box.min z = 0 m)");
-  EXPECT_NE(measured.note().find("below the surface at z = 0.096 m"), std::string::npos)
+  // The depth's inputs named: the pass, the bite depth and where the surface comes from.
+  EXPECT_NE(measured.note().find("pass 1 cuts 1 x dig.bite_depth = 0.12 m below the surface of "
+                                 "bed.file " +
+                                 (Dir() / "floor.h5").string() + " at z = 0.096 m"),
+            std::string::npos)
       << measured.what();
   const InputError estimated =
       Refusal(WriteScene("floor_pour.yaml", "", "bite_depth: 0.02", "bite_depth: 0.2"));
   EXPECT_EQ(estimated.key(), "dig.bite_depth");
-  EXPECT_NE(estimated.note().find("the surface estimated from bed.count"), std::string::npos)
+  EXPECT_NE(estimated.note().find("estimated from bed.count 1450 spheres of bed.radius 0.008 m "
+                                  "settled over the box's 0.37 x 0.17 m floor"),
+            std::string::npos)
       << estimated.what();
   const InputError wall =
       Refusal(WriteScene("wall.yaml", "floor.h5", "start: [0.13, 0.085]", "start: [0.01, 0.085]"));

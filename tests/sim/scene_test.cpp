@@ -351,13 +351,13 @@ const BadCase kBadCases[] = {
      "radius: -1.75e-3",
      "",
      "",
-     {"@.yaml:8: bed.radius: expected a number > 0 or a range [rmin, rmax]", "got -1.75e-3"}},
+     {"@.yaml:8: bed.radius: expected a number >= 1e-6 or a range [rmin, rmax]", "got -1.75e-3"}},
     {"radius_range_reversed",
      "radius: 1.75e-3",
      "radius: [2.0e-3, 1.0e-3]",
      "",
      "",
-     {"@.yaml:8: bed.radius: expected", "0 < rmin <= rmax", "got [2.0e-3, 1.0e-3]",
+     {"@.yaml:8: bed.radius: expected", "1e-6 <= rmin <= rmax", "got [2.0e-3, 1.0e-3]",
       "range reversed"}},
     {"negative_count",
      "count: 2000",
@@ -428,7 +428,7 @@ const BadCase kBadCases[] = {
      "",
      "density: 300",
      "density: 0",
-     {"@_mats.yaml:2: materials.snow.density: expected a number > 0", "got 0"}},
+     {"@_mats.yaml:2: materials.snow.density: expected a number in [1, 1e5]", "got 0"}},
     {"negative_shear_modulus",
      "",
      "",
@@ -708,8 +708,8 @@ TEST(CliTest, BadSceneExitsTwoWithOneLine) {
     EXPECT_EQ(r.status, 2) << r.output;
     EXPECT_EQ(CountLines(r.output), 1) << r.output;
     EXPECT_EQ(r.output, "scoopsim: " + scene +
-                            ":8: bed.radius: expected a number > 0 or a range "
-                            "[rmin, rmax] with 0 < rmin <= rmax (m), got -1\n");
+                            ":8: bed.radius: expected a number >= 1e-6 or a range "
+                            "[rmin, rmax] with 1e-6 <= rmin <= rmax (m), got -1\n");
   }
 }
 
