@@ -750,8 +750,8 @@ TEST(SceneSetTest, OverridesAreCheckedAsTheSceneIs) {
   };
   // A bad value, a bad key, a key under a value that is not a map, a malformed override.
   EXPECT_EQ(error_of(path, {"bed.count=5", "bed.radius=-1"}),
-            "--set bed.radius=-1: bed.radius: expected a number > 0 or a range [rmin, rmax] with "
-            "0 < rmin <= rmax (m), got -1");
+            "--set bed.radius=-1: bed.radius: expected a number >= 1e-6 or a range [rmin, rmax] "
+            "with 1e-6 <= rmin <= rmax (m), got -1");
   EXPECT_EQ(error_of(path, {"bed.cout=5"})
                 .rfind("--set bed.cout=5: bed.cout: expected one of the "
                        "keys material, radius, count",
@@ -800,8 +800,8 @@ TEST(CliTest, SetOverridesASceneKeyOrExitsTwoNamingIt) {
         RunCommand(std::string(command) + " '" + scene + "' --set bed.radius=-1" + tail);
     EXPECT_EQ(value.status, 2) << value.output;
     EXPECT_EQ(value.output,
-              "scoopsim: --set bed.radius=-1: bed.radius: expected a number > 0 or a range "
-              "[rmin, rmax] with 0 < rmin <= rmax (m), got -1\n");
+              "scoopsim: --set bed.radius=-1: bed.radius: expected a number >= 1e-6 or a range "
+              "[rmin, rmax] with 1e-6 <= rmin <= rmax (m), got -1\n");
   }
   EXPECT_FALSE(std::filesystem::exists(out));
 }

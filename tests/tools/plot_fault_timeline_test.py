@@ -71,7 +71,7 @@ def main():
         make_run(old, old=True)
         result = run([old, "-o", os.path.join(d, "old.png")])
         assert result.returncode == 0, result.stderr
-        assert "JOINT_TORQUE_LIMIT on j_b at 0.600 s" in result.stdout, result.stdout
+        assert "JOINT_TORQUE_LIMIT on j_b at 2.600 s" in result.stdout, result.stdout
         png2 = os.path.join(d, "sub", "joint_c.png")
         result = run([fault, "-o", png2, "--joint", "j_c"])
         assert result.returncode == 0 and os.path.exists(png2), result.stderr
