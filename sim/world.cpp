@@ -265,7 +265,11 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver, const DigResume* resum
   const double scoop_mass = spec.scoop.mass;
   dig.com_scoop = spec.scoop.com;
   if (out_) {
-    out_->SetAttribute("scoop_mesh", spec.scoop.mesh);
+    // Absolute, so that render finds it from any folder and a resumed run (whose scene path is
+    // absolute, see Checkpoint) writes the same attribute as the uninterrupted one.
+    std::error_code ec;
+    const std::filesystem::path mesh = std::filesystem::absolute(spec.scoop.mesh, ec);
+    out_->SetAttribute("scoop_mesh", ec ? spec.scoop.mesh : mesh.lexically_normal().string());
     out_->SetAttribute("scoop_mass", scoop_mass);
     out_->SetAttribute("scoop_com_x", dig.com_scoop.x);
     out_->SetAttribute("scoop_com_y", dig.com_scoop.y);

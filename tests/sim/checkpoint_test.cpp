@@ -84,7 +84,10 @@ duration: 0.4
     // Two short passes of a level scoop: down, along, out (blade down, the second pass took the
     // blade 0.4 mm into the box's floor, which the preflight refuses; a plunge of 20 mm and bites
     // of 10 mm pinched a grain between scoop and floor under the edem rolling law, 49% overlap).
-    s << "dig:\n  scoop: {mesh: " << source << "/assets/scoop.stl, material: aluminium}\n"
+    // The mesh relative to the scene's folder, as the shipped scenes give it.
+    s << "dig:\n  scoop: {mesh: "
+      << fs::path(source + "/assets/scoop.stl").lexically_relative(TempDir()).string()
+      << ", material: aluminium}\n"
       << R"(  trajectory:
     preset: none
     start: [0.13, 0.085]
@@ -200,7 +203,9 @@ class ResumeTest : public ::testing::TestWithParam<std::tuple<std::string, int>>
 
 TEST_P(ResumeTest, KilledAndResumedRunEqualsTheUninterrupted) {
   const auto& [kind, threads] = GetParam();
-  const std::string scene = WriteScene(kind);
+  // Given relative to the working folder, as a user types it (the checkpoint keeps it absolute,
+  // so paths the run derives from it, such as the scoop_mesh attribute, must not differ).
+  const std::string scene = fs::relative(WriteScene(kind)).string();
   const std::string tag = kind + std::to_string(threads);
   const std::string common = " --threads " + std::to_string(threads) + " -q";
   const std::string reference = (TempDir() / (tag + "_reference.h5")).string();
