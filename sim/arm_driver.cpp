@@ -653,8 +653,8 @@ void ArmDriver::Finish(H5Output* out) {
     columns[6].float64.push_back(e.limit);
   }
   out->WriteTable("/arm/fault_events", columns, static_cast<int64_t>(r.events.size()));
-  out->SetAttribute("arm_fault_events", static_cast<double>(r.events.size()));
-  out->SetAttribute("arm_fault_latched", static_cast<double>(r.latched));
+  out->SetCountAttribute("arm_fault_events", r.events.size());
+  out->SetCountAttribute("arm_fault_latched", r.latched);
   out->AppendRow("/arm/report/peak_torque", r.peak_demanded.data(), n);
   out->AppendRow("/arm/report/effort_limit", r.effort_limit.data(), n);
   out->AppendRow("/arm/report/margin", margin.data(), n);

@@ -1095,6 +1095,11 @@ void H5Output::SetAttribute(const std::string& name, double value) {
   impl_->Write([&] { h5::WriteDoubleAttribute(impl_->AttributeTarget(), name, value); });
 }
 
+void H5Output::SetCountAttribute(const std::string& name, uint64_t value) {
+  impl_->RequireOpen("SetCountAttribute");
+  impl_->Write([&] { h5::WriteU64Attribute(impl_->AttributeTarget(), name, value); });
+}
+
 void H5Output::SetAttribute(const std::string& name, const std::string& value) {
   impl_->RequireOpen("SetAttribute");
   impl_->Write([&] { h5::WriteStringAttribute(impl_->AttributeTarget(), name, value); });

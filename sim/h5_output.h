@@ -126,6 +126,7 @@ class H5Output {
   void SetStateHash(uint64_t hash);  // root state_hash (hex string) and state_hash_u64
   void SetAttribute(const std::string& name, double value);
   void SetAttribute(const std::string& name, const std::string& value);
+  void SetCountAttribute(const std::string& name, uint64_t value);  // counts and bit sets: uint64
 
   // Puts what follows under `group` (a study writes one dig per group): AppendRow("/scoop/time")
   // then writes <group>/scoop/time, and SetAttribute / SetStateHash set attributes of the group

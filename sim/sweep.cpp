@@ -705,6 +705,10 @@ void MergeParts(const SweepCase& c, const CasePaths& paths, double bed_cpu_s) {
             double v = 0;
             H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v);
             out.SetAttribute(name, v);
+          } else if (cls == H5T_INTEGER) {  // counts and bit sets (SetCountAttribute)
+            uint64_t v = 0;
+            H5Aread(a.get(), H5T_NATIVE_UINT64, &v);
+            out.SetCountAttribute(name, v);
           }
         }
       }

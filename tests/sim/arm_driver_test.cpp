@@ -333,6 +333,20 @@ TEST(ArmDriverTest, BoulderRaisesJointTorqueLimit) {
   const auto events = FaultEventRows(output);
   ASSERT_FALSE(events.empty());
   EXPECT_EQ(events.front(), std::make_pair(kJointTorqueLimit, std::string("j_prox_pitch")));
+  // The run's summary attributes hold the bits and the count as integers (uint64), not floats.
+  const hid_t f = H5Fopen(output.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  for (const char* name : {"arm_fault_latched", "arm_fault_events"}) {
+    const hid_t a = H5Aopen(f, name, H5P_DEFAULT);
+    ASSERT_GE(a, 0) << name;
+    const hid_t type = H5Aget_type(a);
+    EXPECT_EQ(H5Tget_class(type), H5T_INTEGER) << name;
+    uint64_t value = 0;
+    H5Aread(a, H5T_NATIVE_UINT64, &value);
+    EXPECT_EQ(value, std::string(name) == "arm_fault_latched" ? kJointTorqueLimit : events.size());
+    H5Tclose(type);
+    H5Aclose(a);
+  }
+  H5Fclose(f);
 }
 
 TEST(ArmDriverTest, WornMotorDiggingIceRaisesJointTorqueLimit) {
