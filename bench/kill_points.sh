@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Crash consistency of a run's output, write by write: runs `scoopsim run SCENE` again and again,
 # SIGKILLed just before its K-th write to the output (the driver's test hook
-# SCOOPSIM_H5_KILL_AT_WRITE, sim/h5_clean_driver.cpp) for K = 1, 1 + STEP, ... until a run ends
+# SCOOPSIM_H5_KILL_AT_WRITE, sim/files/h5_clean_driver.cpp) for K = 1, 1 + STEP, ... until a run ends
 # unkilled, and reads each killed file with `h5ls -r` (a separate process: HDF5's reader can crash
 # on a torn file). A file is unreadable when h5ls fails or a snapshot before the last lacks one of
 # its 9 datasets. Prints one CSV row: scene, commit, step, kill points, no file yet (killed before

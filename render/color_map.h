@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "sim/scene.h"
-#include "sim/world_view.h"
+#include "sim/input/scene.h"
+#include "sim/files/world_view.h"
 
 namespace render {
 

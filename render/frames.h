@@ -7,8 +7,8 @@
 #include <string>
 
 #include "render/renderer.h"
-#include "sim/scene.h"
-#include "sim/world_view.h"
+#include "sim/input/scene.h"
+#include "sim/files/world_view.h"
 
 namespace render {
 

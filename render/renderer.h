@@ -16,7 +16,7 @@
 #include "render/camera.h"
 #include "render/color_map.h"
 #include "render/image.h"
-#include "sim/world_view.h"
+#include "sim/files/world_view.h"
 
 namespace render {
 

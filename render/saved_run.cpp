@@ -6,9 +6,9 @@
 #include <cstdio>
 #include <vector>
 
-#include "sim/arm_geometry.h"
-#include "sim/mesh_io.h"
-#include "sim/saved_run.h"
+#include "sim/files/arm_geometry.h"
+#include "sim/input/mesh_io.h"
+#include "sim/files/saved_run.h"
 
 namespace render {
 

@@ -1,5 +1,5 @@
 // Frames from a saved run (`scoopsim render OUT.h5 --frames DIR`): every particle snapshot of a
-// sim::H5Output file (layout in sim/h5_output.h) rendered in order. Public header.
+// sim::H5Output file (layout in sim/files/h5_output.h) rendered in order. Public header.
 #pragma once
 
 #include <string>

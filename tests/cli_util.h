@@ -106,7 +106,7 @@ inline int Wait(pid_t pid) {
 }
 
 // Takes the write lock that scoopsim's writers take on an output file (an open-file-description
-// lock, fcntl F_OFD_SETLK: sim/h5_output.h), as a process writing `path` holds it: the
+// lock, fcntl F_OFD_SETLK: sim/files/h5_output.h), as a process writing `path` holds it: the
 // descriptor (closing it releases the lock), or -1 when the lock cannot be had.
 inline int HoldOutputLock(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);

@@ -14,7 +14,7 @@
 //                                            the particle-size study (eq. 5-7; CSV, table, PNGs)
 //   scoopsim sweep SWEEP.yaml -o DIR; scoopsim table build|query|export-csv (tools/sweep_cli.h)
 //   scoopsim arm info URDF [--gravity G]     the parsed arm and its gravity torques
-// Exit status: sim/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
+// Exit status: sim/input/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
 // not settled, 130 stopped by a signal).
 // Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
 #include <unistd.h>
@@ -37,12 +37,12 @@
 #include "render/camera.h"
 #include "render/frames.h"
 #include "render/saved_run.h"
-#include "sim/checkpoint.h"
-#include "sim/commands.h"
-#include "sim/exit_status.h"
-#include "sim/preflight.h"
-#include "sim/saved_run.h"
-#include "sim/scene.h"
+#include "sim/files/checkpoint.h"
+#include "sim/studies/commands.h"
+#include "sim/input/exit_status.h"
+#include "sim/loop/preflight.h"
+#include "sim/files/saved_run.h"
+#include "sim/input/scene.h"
 #include "tools/arm_info.h"
 #include "tools/cli_checks.h"
 #include "tools/sweep_cli.h"

@@ -4,7 +4,7 @@
     tools/plot_fault_timeline.py RUN.h5 [RUN2.h5 ...] -o PLOT.png [--joint NAME]
                                  [--labels A,B,...] [--title TEXT]
 
-Reads the arm series of scoopsim runs of a scene with an `arm:` block (sim/arm_driver.h; SI):
+Reads the arm series of scoopsim runs of a scene with an `arm:` block (sim/loop/arm_driver.h; SI):
   /arm/time (n) [s], /arm/torque_demanded, /arm/torque_applied, /arm/effort_limit (n x joints)
   [N m], /arm/fault_latched (n, uint64); /arm/fault_events (e records: time, flag, flag_name,
   joint, joint_name, value, limit; older files: e x 5 float64 time, flag, joint, value, limit,

@@ -3,7 +3,7 @@
 
     tools/plot_lookup.py TABLE.h5 -o DIR [--cases SWEEP_DIR] [--frame body|scoop] [--smooth W]
 
-TABLE.h5 is `scoopsim table build`'s (sim/wrench_table.h: material x bite depth x pass x rho).
+TABLE.h5 is `scoopsim table build`'s (sim/files/wrench_table.h: material x bite depth x pass x rho).
 Writes, each panel against rho in mm (as the table measures it, its rho_definition: the length
 of the scoop CoM's path since the pass's first contact, or its travel along the trench), drawn by tools/plot_wrench.py's plot (|F| and |T| on top, the force and torque
 components of --frame below, raw thin and smoothed thick over --smooth grid nodes):
@@ -87,7 +87,7 @@ def read_table(path, frame):
             "torque": np.asarray(f["scoop/torque_" + frame][()], dtype=float),
             "cell_case": [text(v) for v in f["cells/case"][()]] if "cells/case" in f else [],
             "case_file": {},
-            # What rho measures (sim/wrench_table.h): path (the CoM's path length, the
+            # What rho measures (sim/files/wrench_table.h): path (the CoM's path length, the
             # default since 2026-12-06) or along (its travel along the trench; older tables).
             "rho_dataset": ("scoop/rho_path" if text(f.attrs.get("rho_definition", "along"))
                             == "path" else "scoop/rho"),

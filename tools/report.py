@@ -228,7 +228,7 @@ def h5_text(value):
 # The sections. Each returns its body's HTML, or None when its files are missing.
 
 def dig_phrase(scene_text):
-    """What the study's scene digs, from its trajectory preset (sim/scene.cpp: table1, table4 or
+    """What the study's scene digs, from its trajectory preset (sim/input/scene.cpp: table1, table4 or
     none), for a sentence's start."""
     m = re.search(r"\bpreset:\s*([A-Za-z0-9_]+)", scene_text)
     preset = m.group(1) if m else ""

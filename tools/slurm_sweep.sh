@@ -2,7 +2,7 @@
 # A sweep as a Slurm job array: each array task runs one case (`scoopsim sweep --case I`), so a
 # sweep spreads over as many nodes as the queue gives; a resubmitted array skips the cases that are
 # done and resumes a stopped one from its last keep (its pour so far or its running pass, kept
-# every --checkpoint-every seconds, default 600; sim/sweep.h).
+# every --checkpoint-every seconds, default 600; sim/studies/sweep.h).
 #
 #   N=$(build/scoopsim sweep SWEEP.yaml --list | wc -l)      # the number of cases
 #   sbatch --array=0-$((N-1)) tools/slurm_sweep.sh SWEEP.yaml OUT_DIR
@@ -10,7 +10,7 @@
 #
 # (or, to chain it: sbatch --dependency=afterok:<array job id> --wrap "build/scoopsim table build
 # OUT_DIR -o OUT_DIR/table.h5"). Each task gets its --cpus-per-task as DEM threads; SCOOPSIM (default: build/scoopsim beside
-# this script's folder) names the binary. A task's exit status is its case's (sim/exit_status.h).
+# this script's folder) names the binary. A task's exit status is its case's (sim/input/exit_status.h).
 #SBATCH --job-name=scoopsim-sweep
 #SBATCH --cpus-per-task=4
 #SBATCH --time=24:00:00

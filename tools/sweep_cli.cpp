@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <map>
 
-#include "sim/commands.h"
-#include "sim/scene.h"
+#include "sim/studies/commands.h"
+#include "sim/input/scene.h"
 #include "tools/cli_checks.h"
 
 namespace tools {

@@ -1,4 +1,4 @@
-// The `sweep` and `table` commands of the CLI (sim/sweep.h, sim/wrench_table.h):
+// The `sweep` and `table` commands of the CLI (sim/studies/sweep.h, sim/files/wrench_table.h):
 //   scoopsim sweep SWEEP.yaml [-o DIR] [--case I] [--list] [--threads N] [--no-table] [-q]
 //   scoopsim table build DIR [-o TABLE.h5] [--rho-step-mm S] [--rho-max-mm R]
 //   scoopsim table query TABLE.h5 --material M --bite-depth-mm D --pass P --rho-mm R
@@ -9,8 +9,8 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
-#include "sim/sweep.h"
-#include "sim/wrench_table.h"
+#include "sim/studies/sweep.h"
+#include "sim/files/wrench_table.h"
 
 namespace tools {
 

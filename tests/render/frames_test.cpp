@@ -20,10 +20,10 @@
 
 #include "render/bench.h"
 #include "render/saved_run.h"
-#include "sim/bed.h"
-#include "sim/commands.h"
-#include "sim/h5_output.h"
-#include "sim/scene.h"
+#include "sim/loop/bed.h"
+#include "sim/studies/commands.h"
+#include "sim/files/h5_output.h"
+#include "sim/input/scene.h"
 #include "tests/cli_util.h"
 
 namespace render {

@@ -14,8 +14,8 @@
 #include "render/bench.h"
 #include "render/camera.h"
 #include "render/frames.h"
-#include "sim/arm_geometry.h"
-#include "sim/scene.h"
+#include "sim/files/arm_geometry.h"
+#include "sim/input/scene.h"
 
 namespace render {
 namespace {

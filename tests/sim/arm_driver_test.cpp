@@ -1,4 +1,4 @@
-// The arm in the loop (sim/arm_driver.cpp) on the scenes it ships with:
+// The arm in the loop (sim/loop/arm_driver.cpp) on the scenes it ships with:
 // scenes/arm/nominal_snow.yaml and scenes/fault/{boulder,weak_joint_ice}.yaml. Beds are poured once
 // per bed and reused.
 //   - the nominal snow dig raises no fault, and the arm tracks the path within 2 mm;
@@ -18,7 +18,7 @@
 //     pass ends one retract and one stop_hold later;
 //   - the snapshots hold the scoop and the arm's links at the poses they had (the XDMF's meshes);
 //   - a bad arm: block or URDF in a scene exits 2 with one line naming the scene, line and key.
-#include "sim/arm_driver.h"
+#include "sim/loop/arm_driver.h"
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
@@ -35,12 +35,12 @@
 #include <string>
 #include <vector>
 
-#include "sim/arm_geometry.h"
-#include "sim/bed_io.h"
-#include "sim/h5_output.h"
-#include "sim/saved_run.h"
-#include "sim/scene.h"
-#include "sim/world.h"
+#include "sim/files/arm_geometry.h"
+#include "sim/files/bed_io.h"
+#include "sim/files/h5_output.h"
+#include "sim/files/saved_run.h"
+#include "sim/input/scene.h"
+#include "sim/loop/world.h"
 #include "tests/cli_util.h"
 
 namespace {

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "sim/bed_io.h"
-#include "sim/scene.h"
-#include "sim/world.h"
+#include "sim/files/bed_io.h"
+#include "sim/input/scene.h"
+#include "sim/loop/world.h"
 
 namespace scoopsim_test {
 

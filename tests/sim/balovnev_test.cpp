@@ -1,6 +1,6 @@
-// sim/balovnev.h: Balovnev's excavation force (FACTS.md section 7) against values computed by
+// sim/studies/balovnev.h: Balovnev's excavation force (FACTS.md section 7) against values computed by
 // hand, its limits and its refusals.
-#include "sim/balovnev.h"
+#include "sim/studies/balovnev.h"
 
 #include <gtest/gtest.h>
 
@@ -26,7 +26,7 @@ BalovnevSoil PluginSoil() {
   return s;
 }
 
-// The hand computation (30 significant digits, mpmath; the formulas of sim/balovnev.h):
+// The hand computation (30 significant digits, mpmath; the formulas of sim/studies/balovnev.h):
 //   sin 44 = 0.694658370458997, K = (1 - sin phi)/(1 + sin phi) = 0.180178869596178
 //   psi = asin(sin 28 / sin 44) = 0.742091385594528 rad, x* = (pi - delta - psi)/2 = 54.7406 deg
 //   beta = 10 deg and alpha_e = 30 deg lie below x*: A_I; pi/2 above: A_II

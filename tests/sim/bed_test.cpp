@@ -1,6 +1,6 @@
 // A settled bed of 3.5 mm snow spheres (scenes/settle_small.yaml) against the properties of a
 // granular packing at rest.
-#include "sim/bed.h"
+#include "sim/loop/bed.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "sim/scene.h"
+#include "sim/input/scene.h"
 #include "tests/cli_util.h"
 
 namespace sim {

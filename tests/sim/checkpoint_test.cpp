@@ -1,4 +1,4 @@
-// Checkpoint and resume (sim/checkpoint.h, World::MakeCheckpoint / ResumeFrom) end to end
+// Checkpoint and resume (sim/files/checkpoint.h, World::MakeCheckpoint / ResumeFrom) end to end
 // through the binary: a run with --checkpoint-every, SIGKILLed once a checkpoint exists and
 // resumed with --resume, writes the same output, bit for bit (every dataset, the state hash, every
 // root attribute), as the uninterrupted run, for a plain run, a two-pass dig and a bed of clumps,

@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
-#include "sim/balovnev.h"
-#include "sim/saved_run.h"
-#include "sim/size_study.h"
+#include "sim/studies/balovnev.h"
+#include "sim/files/saved_run.h"
+#include "sim/studies/size_study.h"
 #include "tests/cli_util.h"
 
 namespace {

@@ -1,7 +1,7 @@
 // The scoop wrench in the study's frames (paper eqs. 2-3, Fig. 1) and the dig's helpers, against
 // closed forms: a known force at a known point, frame invariance under a rotation of the whole
 // scene about the vertical, the free-surface height of a lattice, the cavity test.
-#include "sim/dig.h"
+#include "sim/loop/dig.h"
 
 #include <gtest/gtest.h>
 
@@ -11,8 +11,8 @@
 #include <string>
 
 #include "dem/system.h"
-#include "sim/commands.h"
-#include "sim/scene.h"
+#include "sim/studies/commands.h"
+#include "sim/input/scene.h"
 #include "tests/cli_util.h"
 
 namespace sim {

@@ -1,10 +1,10 @@
-// Tests sim/h5_output.cpp and sim/bed_io.cpp: time series and snapshots read back bit for bit with
+// Tests sim/files/h5_output.cpp and sim/files/bed_io.cpp: time series and snapshots read back bit for bit with
 // the plain HDF5 C API, with the promised chunking and filters; the XDMF3 sidecar names exactly the
 // datasets that are in the file; a run stopped by SIGTERM closes a complete file and one killed by
 // SIGKILL keeps every flushed row; a saved bed loads back into an identical System, and a bad bed
 // is refused with an InputError naming the file and the dataset; a full disk (a 64 KiB tmpfs)
 // gives one line naming the file, and no temporary file is left.
-#include "sim/h5_output.h"
+#include "sim/files/h5_output.h"
 
 #include <gtest/gtest.h>
 #if defined(__SANITIZE_ADDRESS__)
@@ -31,9 +31,9 @@
 #include <vector>
 
 #include "dem/system.h"
-#include "sim/bed_io.h"
-#include "sim/internal_h5.h"
-#include "sim/scene.h"
+#include "sim/files/bed_io.h"
+#include "sim/files/internal_h5.h"
+#include "sim/input/scene.h"
 #include "tests/cli_util.h"
 
 namespace sim {

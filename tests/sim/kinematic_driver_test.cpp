@@ -1,4 +1,4 @@
-// The kinematic scoop driver (sim/kinematic_driver.cpp) against closed forms written out here,
+// The kinematic scoop driver (sim/loop/kinematic_driver.cpp) against closed forms written out here,
 // and a tool path the study's four segments cannot express, dug end to end.
 #include <gtest/gtest.h>
 
@@ -6,10 +6,10 @@
 #include <cmath>
 #include <string>
 
-#include "sim/exit_status.h"
-#include "sim/scene.h"
-#include "sim/scoop_driver.h"
-#include "sim/world.h"
+#include "sim/input/exit_status.h"
+#include "sim/input/scene.h"
+#include "sim/loop/scoop_driver.h"
+#include "sim/loop/world.h"
 
 namespace sim {
 namespace {

@@ -1,5 +1,5 @@
-// Mesh loading (sim/mesh_io.cpp): the committed scoop assets and the errors a user can cause.
-#include "sim/mesh_io.h"
+// Mesh loading (sim/input/mesh_io.cpp): the committed scoop assets and the errors a user can cause.
+#include "sim/input/mesh_io.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <fstream>
 #include <string>
 
-#include "sim/scene.h"
+#include "sim/input/scene.h"
 #include "tests/cli_util.h"
 
 namespace sim {

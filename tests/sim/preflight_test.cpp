@@ -1,7 +1,7 @@
-// Tests sim/preflight.cpp and the bed file checks of sim/bed_io.cpp: each defect of issue 22's
+// Tests sim/loop/preflight.cpp and the bed file checks of sim/files/bed_io.cpp: each defect of issue 22's
 // "every bad input refused, and refused early" is refused with one line that names the file, the
 // line (or the dataset) and the key, before any bed is poured or loaded, and the CLI exits 2.
-#include "sim/preflight.h"
+#include "sim/loop/preflight.h"
 
 #include <gtest/gtest.h>
 
@@ -14,7 +14,7 @@
 
 #include "../cli_util.h"
 #include "bad_input_util.h"
-#include "sim/progress.h"
+#include "sim/loop/progress.h"
 
 namespace sim {
 namespace {

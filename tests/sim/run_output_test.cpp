@@ -1,5 +1,5 @@
-// What `scoopsim run` and `scoopsim bed` leave behind when things go wrong (sim/commands.cpp,
-// sim/h5_output.cpp), end to end through the binary on tiny_dig (1450 spheres): a run SIGKILLed
+// What `scoopsim run` and `scoopsim bed` leave behind when things go wrong (sim/studies/commands.cpp,
+// sim/files/h5_output.cpp), end to end through the binary on tiny_dig (1450 spheres): a run SIGKILLed
 // at random moments leaves a file that plain HDF5 readers open (C API, h5py, h5dump) holding a
 // prefix of the uninterrupted run's rows, at least those a reader saw before the kill; a second
 // run given the same output, a bed over an output being written, `-o` naming a FIFO or a device
@@ -24,7 +24,7 @@
 #include <thread>
 #include <vector>
 
-#include "sim/saved_run.h"
+#include "sim/files/saved_run.h"
 #include "tests/cli_util.h"
 
 namespace {

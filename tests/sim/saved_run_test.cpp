@@ -1,9 +1,9 @@
-// Tests sim/saved_run.cpp: a run written by sim::H5Output reads back exactly (stored scene text
+// Tests sim/files/saved_run.cpp: a run written by sim::H5Output reads back exactly (stored scene text
 // and its box, gravity and render block; root attributes; snapshots in order with their particles
 // in id order; the /scoop/ series), and every file it cannot read as a run (missing, not HDF5,
 // without snapshots, with a snapshot dataset of the wrong shape, with a bad stored render block)
 // is an InputError naming the file.
-#include "sim/saved_run.h"
+#include "sim/files/saved_run.h"
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "sim/h5_output.h"
-#include "sim/internal_h5.h"
+#include "sim/files/h5_output.h"
+#include "sim/files/internal_h5.h"
 #include "tests/cli_util.h"
 
 namespace sim {

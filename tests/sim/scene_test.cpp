@@ -1,7 +1,7 @@
-// Tests sim/scene.cpp: the shipped scenes load with the time step of paper eq. 4, every malformed
+// Tests sim/input/scene.cpp: the shipped scenes load with the time step of paper eq. 4, every malformed
 // scene is refused with one line naming file, line, key and expectation, and the CLI turns such an
 // error into exit status 2 and one line on stderr.
-#include "sim/scene.h"
+#include "sim/input/scene.h"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "dem/mesh.h"
-#include "sim/mesh_io.h"
-#include "sim/trajectory.h"
+#include "sim/input/mesh_io.h"
+#include "sim/input/trajectory.h"
 #include "tests/cli_util.h"
 
 namespace sim {

@@ -1,4 +1,4 @@
-// Angles in scenes (issue 40, sim/yaml_input.h): every angle key takes a bare number in degrees
+// Angles in scenes (issue 40, sim/input/yaml_input.h): every angle key takes a bare number in degrees
 // (deg/s for a rate) as before, or a number with its unit ("90 deg", "1.5708 rad", "30 deg/s",
 // "0.5 rad/s"); a bare number that looks like radians (not whole, |v| <= 2 pi) is taken as degrees
 // with one warning line naming file, line and key; an unknown unit is refused with one line.
@@ -10,7 +10,7 @@
 #include <regex>
 #include <string>
 
-#include "sim/scene.h"
+#include "sim/input/scene.h"
 #include "tests/cli_util.h"
 
 namespace sim {

@@ -1,7 +1,7 @@
-// The particle-size study's pure functions (sim/size_study.cpp): the smoothing against its
+// The particle-size study's pure functions (sim/studies/size_study.cpp): the smoothing against its
 // definition, a case's curve, eq. 6 and eq. 7 on synthetic curves with known answers, the cases
 // (same solid volume, seeds, skin) and their sweep file, bad --sizes refused with one line.
-#include "sim/size_study.h"
+#include "sim/studies/size_study.h"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/sweep.h"
+#include "sim/studies/sweep.h"
 #include "tests/cli_util.h"
 
 namespace {

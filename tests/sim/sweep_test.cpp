@@ -1,9 +1,9 @@
-// Sweeps (sim/sweep.cpp): the sweep file (cases from a grid and a list, errors at load with the
+// Sweeps (sim/studies/sweep.cpp): the sweep file (cases from a grid and a list, errors at load with the
 // line and key), status records, and end to end on scenes/sweeps/tiny.yaml (four cases, two
 // passes each): a plain run, a two-rank `mpirun` run, `--case I` and runs SIGKILLed mid-case
 // (in a pass without checkpoints, in a pass with them, in the pour) then resumed all give the
 // same table and case rows, bit for bit.
-#include "sim/sweep.h"
+#include "sim/studies/sweep.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -23,9 +23,9 @@
 #include <string>
 #include <vector>
 
-#include "sim/bed_io.h"
-#include "sim/checkpoint.h"
-#include "sim/saved_run.h"
+#include "sim/files/bed_io.h"
+#include "sim/files/checkpoint.h"
+#include "sim/files/saved_run.h"
 #include "tests/cli_util.h"
 
 namespace {

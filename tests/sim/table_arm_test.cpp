@@ -1,4 +1,4 @@
-// The table-driven arm (sim/table_arm.cpp): the lander's arm in Bullet, its scoop wrench from a
+// The table-driven arm (sim/loop/table_arm.cpp): the lander's arm in Bullet, its scoop wrench from a
 // synthetic wrench table (written by the test as case files, built with sim::BuildWrenchTable),
 // no DEM. The scene: the arm of scenes/arm/nominal_snow.yaml, the scoop started buried (first
 // contact at once).
@@ -18,7 +18,7 @@
 //     naming the file and the key, exit 2 from the CLI); rho
 //     past the table's data holds the last value (the run reports the steps it held);
 //   - determinism: the same rows on 1 and 2 threads (the run is single-threaded: Bullet only).
-#include "sim/table_arm.h"
+#include "sim/loop/table_arm.h"
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
@@ -34,11 +34,11 @@
 #include <vector>
 
 #include "arm/kinematics.h"
-#include "sim/commands.h"
-#include "sim/h5_output.h"
-#include "sim/saved_run.h"
-#include "sim/scene.h"
-#include "sim/wrench_table.h"
+#include "sim/studies/commands.h"
+#include "sim/files/h5_output.h"
+#include "sim/files/saved_run.h"
+#include "sim/input/scene.h"
+#include "sim/files/wrench_table.h"
 #include "tests/cli_util.h"
 
 namespace {

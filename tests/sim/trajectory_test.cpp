@@ -1,8 +1,8 @@
-// Scoop trajectory (sim/trajectory.cpp) against the paper's Tables 1 and 4, written out here
+// Scoop trajectory (sim/input/trajectory.cpp) against the paper's Tables 1 and 4, written out here
 // independently: pitch = initial - rate (t - start) inside a rotation, the pivot moving at
 // constant speed inside the approach and the linear push, the blade along (cos theta, 0, -sin
 // theta).
-#include "sim/trajectory.h"
+#include "sim/input/trajectory.h"
 
 #include <gtest/gtest.h>
 

@@ -1,11 +1,11 @@
-// The run loop (sim/world.cpp). The golden state hash: scenes/tiny_dig.yaml (a bed of 1450
+// The run loop (sim/loop/world.cpp). The golden state hash: scenes/tiny_dig.yaml (a bed of 1450
 // snow spheres poured, then one Table 1 pass) ends in the state whose hash is kTinyDigHash, on 1
 // and on 2 threads. When physics changes on purpose, update kTinyDigHash in the same commit and
 // say why there; any other change of it is a regression.
 // Determinism of a whole run through the CLI (scoopsim run): the same scene gives the same root
 // state_hash attribute with 1 and 2 threads, and in two runs; a run from a saved bed equals a run
 // that made the bed itself.
-#include "sim/world.h"
+#include "sim/loop/world.h"
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
@@ -16,8 +16,8 @@
 #include <fstream>
 #include <string>
 
-#include "sim/exit_status.h"
-#include "sim/scene.h"
+#include "sim/input/exit_status.h"
+#include "sim/input/scene.h"
 #include "tests/cli_util.h"
 
 namespace {

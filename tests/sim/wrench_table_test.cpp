@@ -1,10 +1,10 @@
-// The wrench table (sim/wrench_table.cpp) on synthetic case files, no DEM: two materials, two
+// The wrench table (sim/files/wrench_table.cpp) on synthetic case files, no DEM: two materials, two
 // bite depths, two passes, each pass's wrench a known linear function of rho. Closed forms: the
 // table at a grid node between two rows is the line through them (exact for a linear wrench, to
 // rounding: 1e-12 relative); Query at a grid node and a stored bite depth returns the stored
 // sample bit for bit; between nodes it is the linear blend of the two (to rounding); out of the
 // domain it throws OutOfTableDomain, or clamps when asked.
-#include "sim/wrench_table.h"
+#include "sim/files/wrench_table.h"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/h5_output.h"
+#include "sim/files/h5_output.h"
 #include "tests/cli_util.h"
 
 namespace {

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""tools/fz_by_pass.py on a synthetic dig file (the /scoop/ rows of sim/world.cpp, no DEM): two
+"""tools/fz_by_pass.py on a synthetic dig file (the /scoop/ rows of sim/loop/world.cpp, no DEM): two
 passes, each a vertical descent (pitch 90 deg, 10 rows, contact from its 6th row), a quarter turn
 to level (30 rows), a push along x (40 rows) and a quarter turn up (30 rows). The force in l_scoop
 is constant per segment, Fz = 1, 2, 3, 4 N (x 10 in pass 2) and Fx = -Fz, so, closed forms: the
@@ -27,7 +27,7 @@ SURFACE = 0.1
 
 
 def quat_pitch(theta):
-    """l_scoop orientation at pitch theta (sim/trajectory.h): R_y(theta) R0, R0 = rpy(pi, 0, 0),
+    """l_scoop orientation at pitch theta (sim/input/trajectory.h): R_y(theta) R0, R0 = rpy(pi, 0, 0),
     as w, x, y, z."""
     c, s = np.cos(theta / 2), np.sin(theta / 2)
     # (c, 0, s, 0) * (0, 1, 0, 0) = (0, c, 0, -s)

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """tools/plot_lookup.py on a synthetic wrench table with known trends (written here in the layout
-of sim/wrench_table.h, no DEM): ice and snow, bite depths 3, 5, 9, 15 mm, passes 1-3, a 1 mm rho
+of sim/files/wrench_table.h, no DEM): ice and snow, bite depths 3, 5, 9, 15 mm, passes 1-3, a 1 mm rho
 grid to 200 mm. Cell (material, d, p) has data on its first n = 60 + 10 p nodes (NaN after) with
   F = (0, -a (1 + k / (n - 1)), 0) N,  T = (0.05 F_y, 0, 0) N m,  k = 0 .. n - 1,
   a = c d p / mm,  c = 10 N (ice), 1 N (snow),
