@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # scoopsim against LIGGGHTS 3.8 on the same settled bed, in interleaved pairs: on a shared 2-vCPU
 # host the 2-thread rate of either code swings by half within an hour, so only a LIGGGHTS run and
-# a scoopsim run made one right after the other compare the codes (ARCHITECTURE.md, the force pass).
+# a scoopsim run made one right after the other compare the codes (docs/dem.md, the force pass).
 #
 #   bench/compare_liggghts.sh                 # 6 pairs, 2 threads / 2 MPI ranks, 50,000 particles
 #   PAIRS=3 THREADS=1 bench/compare_liggghts.sh

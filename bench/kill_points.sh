@@ -8,7 +8,7 @@
 # the file was put in place), unreadable, and the first K the run outlived (its writes are fewer).
 #
 #   bench/kill_points.sh SCENE [STEP]        # e.g. a 60-sphere bed, snapshot_every: 1
-# (ARCHITECTURE.md, Crash-safe output; the rows of 2026-12-04 are bench/results/vm/h5_kill_points.csv)
+# (docs/files.md, Crash-safe output; the rows of 2026-12-04 are bench/results/vm/h5_kill_points.csv)
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BIN=${BIN:-$ROOT/build/scoopsim}

@@ -222,7 +222,7 @@ struct SlabTally {
 };
 
 // Particle-particle forces of slab s, block of particles by block. The hot loop of the step (the
-// larger part of a dig's time, ARCHITECTURE.md): its three stages (find the touching pairs,
+// larger part of a dig's time, docs/dem.md): its three stages (find the touching pairs,
 // gather and evaluate them in a batch, accumulate) stay in one body of some 120 lines, as before
 // System was split, so that the compiler keeps the arrays in registers across them and no call
 // sits inside the block loop. Splitting it further was not tried.

@@ -35,7 +35,7 @@ struct Plane {
 struct SleepConfig {
   bool enabled = false;
   // Thresholds measured on scenes/sleep_check.yaml: a quiet speed of 2e-3 m/s raised the mean
-  // |F| of a dig by 6%, 5e-4 m/s by 0.9% (bench/sleep_accuracy.sh; ARCHITECTURE.md).
+  // |F| of a dig by 6%, 5e-4 m/s by 0.9% (bench/sleep_accuracy.sh; docs/dem.md).
   double speed = 5e-4;          // a particle is quiet below this speed (and spin * radius) [m/s]
   double wake_speed = 1e-3;     // a sleeping particle touched by one faster than this wakes [m/s]
   double wake_distance = 0.01;  // particles whose centre is this close to a mesh stay awake [m]

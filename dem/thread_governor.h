@@ -1,8 +1,8 @@
 // The thread governor: how many worker threads the next step uses. Results are bit-identical on
-// any thread count (ARCHITECTURE.md, "Determinism"), so the count may change between any two
+// any thread count (docs/dem.md, "Determinism"), so the count may change between any two
 // steps; the governor changes it when measurement says another count is faster, as when another
 // process holds one of the cores and every barrier waits for the descheduled thread
-// (ARCHITECTURE.md, "A busy core"). Pure logic over the step times it is given: no clock of its
+// (docs/dem.md, "A busy core"). Pure logic over the step times it is given: no clock of its
 // own, so tests feed it made-up times.
 #pragma once
 

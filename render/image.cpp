@@ -199,7 +199,7 @@ void WritePng(const std::string& path, const Image& image, int level) {
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   // Level 1 with the SUB filter: on the benchmark frames 18 ms and 524 KB, against 23 ms with no
   // filter, 30 ms with adaptive filters and 28 ms at level 6, each within 6% of that size
-  // (ARCHITECTURE.md). Level 0 stores the rows uncompressed (5x larger).
+  // (docs/render.md). Level 0 stores the rows uncompressed (5x larger).
   png_set_compression_level(png, std::clamp(level, 0, 9));
   png_set_filter(png, PNG_FILTER_TYPE_BASE, level == 0 ? PNG_FILTER_NONE : PNG_FILTER_SUB);
   png_write_info(png, info);

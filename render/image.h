@@ -45,7 +45,7 @@ int TextWidth(const std::string& text, int scale);
 void DrawText(Image* image, int x, int y, const std::string& text, int scale, Rgba8 color);
 
 // Writes `image` as an 8-bit RGB PNG (alpha dropped). `level` is the zlib level 0..9
-// (1: fastest that still compresses, see ARCHITECTURE.md). Throws std::runtime_error naming the
+// (1: fastest that still compresses, see docs/render.md). Throws std::runtime_error naming the
 // path when the file cannot be written.
 void WritePng(const std::string& path, const Image& image, int level = 1);
 

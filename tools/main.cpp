@@ -689,7 +689,7 @@ int Main(int argc, char** argv) {
 // threads: 1.00x, every region waking the other thread); with one core busy a wait costs at most
 // that spin and the thread governor (dem/thread_governor.h) drops to one thread (2 threads 0.98-
 // 1.04x one thread's time, sleeping 1.08-1.17x, spinning 10x): bench/busy_core.sh,
-// ARCHITECTURE.md "A busy core". The runtime reads its settings when it loads, before main, so
+// docs/dem.md "A busy core". The runtime reads its settings when it loads, before main, so
 // the program starts itself again once with the setting in its environment. `scoopsim bench`
 // keeps the runtime's default (spinning), as the journal's rows were measured.
 void BriefSpinByDefault(int argc, char** argv) {

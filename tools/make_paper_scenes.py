@@ -38,7 +38,7 @@ def clumps_for(lx, ly, depth):
 
 # Time step of the snow digs (single spheres): 0.3 t_R, the top of the study's 0.2-0.3 range
 # (section 3). On scenes/sleep_check.yaml it moved the mean |F| of a dig by 0.6% from 0.25 t_R
-# (ARCHITECTURE.md, "Time step of the sphere digs"). Clump digs stay at 0.25 t_R: their force
+# (docs/dem.md, "Trade-offs written down"). Clump digs stay at 0.25 t_R: their force
 # depends on the step by more (the shape study's time-step table).
 SNOW_DIG_STEP = 0.3
 

@@ -1,6 +1,6 @@
 // The clean-header file driver (sim/files/internal_h5.h, CleanHeaderDriver): POSIX I/O as HDF5's own
 // sec2 driver, except that the superblock on disk always reads as a closed file. Why and what it
-// guarantees: ARCHITECTURE.md "Crash-safe output".
+// guarantees: docs/files.md "Crash-safe output".
 //
 // HDF5 1.10 in SWMR mode writes the metadata of a dataset's appends in dependency order (a block
 // is on disk before anything that points to it) and never reuses freed space, so every prefix of

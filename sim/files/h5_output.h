@@ -22,7 +22,7 @@
 // (t = 0 at the start of the pour); a run's root attribute start_time is when its dig (or plain
 // run) began on it (README "One clock").
 //
-// Crash safety (ARCHITECTURE.md "Crash-safe output"): the file is written in HDF5's
+// Crash safety (docs/files.md "Crash-safe output"): the file is written in HDF5's
 // single-writer/multiple-reader (SWMR) mode, whose ordered metadata writes keep every prefix of
 // the writes a consistent file, through a file driver that keeps the superblock on disk that of a
 // closed file. A run killed at any moment (SIGKILL included) leaves a file that opens as any other

@@ -49,7 +49,7 @@ int LanderMaterialId(const std::string& name);  // 0 when it has no fixed id
 
 // What rho measures, from the scoop's first contact in the pass: kPath the length of the path
 // of the scoop's CoM (/scoop/rho_path; the study's and the lander's table's rho), kAlong the
-// CoM's displacement along the trench (/scoop/rho). ARCHITECTURE "The table's rho" gives the
+// CoM's displacement along the trench (/scoop/rho). docs/studies.md "The table's rho" gives the
 // evidence for kPath.
 enum class RhoDefinition { kPath, kAlong };
 const char* RhoDefinitionName(RhoDefinition d);  // "path" or "along"

@@ -114,7 +114,7 @@ struct ObstacleSpec {
   double stiffness = 2e6;  // scoop-sphere contact stiffness [N/m] (linear penalty)
 };
 
-// When the arm (Bullet) and the DEM exchange pose and wrench (ARCHITECTURE.md, "The arm in the
+// When the arm (Bullet) and the DEM exchange pose and wrench (docs/arm.md, "The arm in the
 // loop"). kBulletFirst: Bullet steps first with the wrench of the last DEM step, so the DEM gets
 // the pose at the end of its coming step. kDemFirst: the DEM steps first with the pose Bullet
 // had at the start of the step (a one-step lag), then Bullet steps with that step's wrench.

@@ -22,7 +22,7 @@
 //   to l_scoop; Bullet steps; the fault monitor takes the sample (arm/fault_monitor.h); the
 //   force/torque sensor at arm.faults.sensor_joint is sampled at sensor_rate (arm::InverseDynamics
 //   with Bullet's accelerations and the applied wrenches) and held between samples.
-// Timing (ArmSpec::timing, ARCHITECTURE.md "The arm in the loop"): bullet_first (default) steps
+// Timing (ArmSpec::timing, docs/arm.md "The arm in the loop"): bullet_first (default) steps
 // Bullet inside MotionAt with the wrench of the DEM steps before, so the DEM gets the pose at the
 // end of its coming step (with substeps, poses between two Bullet states are interpolated);
 // dem_first steps Bullet inside Feedback, so the DEM sees the pose one Bullet step old.

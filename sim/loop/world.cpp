@@ -506,7 +506,7 @@ void World::Record() {
     // Two measures of the distance since the scoop first touched a particle in this pass:
     // rho_path, the length of the CoM's path (paper eq. 1's rho, "the relative distance covered
     // along the trench since the first contact", 0-450 mm for the Table 4 path, whose CoM path
-    // is 470 mm; ARCHITECTURE "The table's rho"), summed step by step as chords (a 30 deg/s
+    // is 470 mm; docs/studies.md "The table's rho"), summed step by step as chords (a 30 deg/s
     // arc of 45 mm radius differs from its chords by < 1e-9 of its length at dt = 1e-5 s); and
     // rho, the CoM's displacement along the trench (390 mm for that path).
     if (!dig.touched && mw.contacts > 0) {

@@ -7,7 +7,7 @@
 //     this coarse bed, measured as the same difference between the kinematic path and itself moved
 //     0.5 mm along the trench (the arm's rms tracking error is ~0.6 mm, max 1.3 mm). The issue's
 //     goal, 10% of the peak, is out of reach here: the nominal dig's wrench is 0.1-1 N, a handful
-//     of 8 mm spheres, and the 0.5 mm shift alone moves it by ~26% (ARCHITECTURE.md);
+//     of 8 mm spheres, and the 0.5 mm shift alone moves it by ~26% (bench/results/vm/journal.md);
 //   - determinism: the coupled dig ends in the same DEM state hash, and the same arm figures, on 1
 //     and 2 threads and on a rerun (Bullet runs on one thread; the DEM is thread-count exact),
 //     and that hash is pinned (kNominalArmHash);
