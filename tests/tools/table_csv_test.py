@@ -73,7 +73,7 @@ def main():
             grid = t["rho"][:]
             force = t["scoop/force_scoop"][:]
             torque = t["scoop/torque_scoop"][:]
-        assert ids == [1, 2], ids  # snow 1, ice 2 (README)
+        assert ids == [1, 2], ids  # snow 1, ice 2 (docs/outputs.md)
         assert list(depths) == [0.003, 0.009, 0.015], depths
         expected = []
         for m, mid in enumerate(ids):
