@@ -13,12 +13,11 @@
 #include <vector>
 
 #include "dem/material.h"
-#include "sim/loop/arm_driver.h"
-#include "sim/loop/bed.h"
 #include "sim/files/bed_io.h"
+#include "sim/input/trajectory.h"
+#include "sim/loop/bed.h"
 #include "sim/loop/dig.h"
 #include "sim/loop/scoop_driver.h"
-#include "sim/input/trajectory.h"
 
 namespace sim {
 namespace {
@@ -435,13 +434,13 @@ RunForecast Preflight(Scene* scene, Work work) {
                         " s simulated: the run could never end"
                   : "its planned time has no end");
   }
-  // The arm's plan of each pass (IK), once the run's length is known to be sane (its path is
-  // sampled every 10 ms): a path out of its reach is refused here, before any work (ArmDriver
-  // throws InputError naming arm.base).
-  if (work == Work::kRun && scene->dig.enabled && scene->arm.enabled && !scene->arm.table_driven &&
-      scene->arm.model) {
-    ArmDriver arm(*scene, /*announce=*/false);
-    for (int pass = 1; pass <= scene->dig.passes; ++pass) arm.PlannedDuration(pass, context);
+  // The scene's own driver plans each pass once the run's length is known to be sane (above, on
+  // the tool path's own length; an arm's plan samples its path every 10 ms): an arm's path out
+  // of its reach is refused here, before any work (ArmDriver throws InputError naming arm.base),
+  // and so is a wrench table that does not cover the dig (TableWrench).
+  if (work == Work::kRun && scene->dig.enabled) {
+    const std::unique_ptr<ScoopDriver> driver = MakeScoopDriver(*scene, /*announce=*/false);
+    for (int pass = 1; pass <= scene->dig.passes; ++pass) driver->PlannedDuration(pass, context);
   }
   return f;
 }

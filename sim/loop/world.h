@@ -142,6 +142,8 @@ class World {
 
   // Simulated time the whole run is planned to take from the start [s].
   double PlannedDuration() const;
+  // The loop's step [s]: the DEM's, or the driver's when it brings its own wrench (no bed).
+  double StepSize() const;
   const dem::System& system() const { return *system_; }
   dem::System& mutable_system() { return *system_; }
   const DigSummary& dig_summary() const { return summary_; }
@@ -151,6 +153,7 @@ class World {
   struct Dig;
   void StartPlain();
   void PlanSnapshots();  // tells the output how many snapshots the planned run makes
+  int64_t StepsDone() const;  // loop steps since the run (plain or dig) began
   void Record();         // the rows, snapshots and pass changes that follow a step (may throw)
   void RecordPlainRow();
   void RecordDigRow();
