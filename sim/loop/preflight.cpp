@@ -261,6 +261,8 @@ void CheckDigPath(const Scene& scene, double surface, double clear_z,
   const double spacing = 0.5 * scene.bed.radius_min;
   constexpr int kMinSamples = 400, kMaxSamples = 200000;
   BedContext bed{&mesh, surface, clear_z, scene.time_step, 0.0};
+  // The tool path as placed per pass (whichever driver carries the scoop along it: an arm tracks
+  // it), not the run's driver (MakeScoopDriver, below).
   const std::unique_ptr<KinematicDriver> driver = KinematicDriver::ForDig(dig);
   for (int pass = 1; pass <= dig.passes; ++pass) {
     const double duration = driver->BeginPass(pass, bed).duration;
@@ -408,6 +410,7 @@ RunForecast Preflight(Scene* scene, Work work) {
   std::string time_key = "bed.settle.max_time";
   if (work == Work::kRun) {
     if (scene->dig.enabled) {
+      // The tool path's own length, cheap: an arm's (slowed) plan waits until this is sane.
       const std::unique_ptr<KinematicDriver> driver = KinematicDriver::ForDig(scene->dig);
       for (int pass = 1; pass <= scene->dig.passes; ++pass)
         f.simulated += driver->PlannedDuration(pass, context);

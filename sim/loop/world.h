@@ -1,11 +1,13 @@
 // The run loop: one World owns the DEM system, the scoop and its driver, and the outputs, and
 // advances them together one step at a time. Every command goes through it: `scoopsim bed`
-// (Pour), `scoopsim run` with and without a dig, the shape study and `bench step`.
+// (Pour), `scoopsim run` with and without a dig (the arm's on a wrench table too), the sweeps and
+// studies and `bench step`.
 //
 //   World world(scene, threads);
-//   world.LoadBed(path) or world.Pour(...)           the bed
+//   world.LoadBed(path) or world.Pour(...)           the bed (none for a driver with its own
+//                                                    wrench: ScoopDriver::OwnStep() > 0)
 //   world.OpenOutput(path) / UseOutput(&out)         optional: HDF5 rows, snapshots
-//   world.StartDig(std::make_unique<KinematicDriver>(...))   optional: the scoop
+//   world.StartDig(MakeScoopDriver(scene))           optional: the scoop and its driver
 //   RunResult r = world.Run(control);                steps until the end, a signal or a fault
 //
 // Step() is the loop's body, usable on its own: it never throws and reports the step's health.
@@ -185,7 +187,7 @@ class World {
   std::function<void()> on_keep_;
 };
 
-// How a command runs a scene (sim::RunScene, sim::MakeBed, sim::RunTableArm).
+// How a command runs a scene (sim::RunScene, sim::MakeBed).
 struct RunOptions {
   int threads = 0;     // 0 = all cores
   std::string output;  // output HDF5 path
