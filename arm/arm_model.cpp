@@ -334,6 +334,13 @@ void CheckTree(const Reporter& report, const urdf::ModelInterface& urdf) {
 
 }  // namespace
 
+ArmModel Derated(const ArmModel& model, const std::vector<double>& factors) {
+  ArmModel derated = model;
+  for (size_t i = 0; i < derated.joints.size() && i < factors.size(); ++i)
+    derated.joints[i].effort *= factors[i];
+  return derated;
+}
+
 ArmModel LoadArmModel(const std::string& path, const std::string& tip_link) {
   std::error_code ec;
   // A folder opens as a stream that reads nothing (urdfdom: "Error document empty").

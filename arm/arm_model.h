@@ -136,6 +136,11 @@ ArmModel LoadArmModel(const std::string& path, const std::string& tip_link = "l_
 ArmModel ParseArmModel(const std::string& urdf_text, const std::string& source,
                        const std::string& tip_link = "l_scoop", const std::string& base_dir = "");
 
+// `model` with each joint's effort limit multiplied by its factor (a worn motor's derate, in
+// (0, 1]; one per joint, missing ones 1): effort_i x factors_i, the limit the controller clamps at
+// and the fault monitor compares with. The URDF's own values stay in the model it was read into.
+ArmModel Derated(const ArmModel& model, const std::vector<double>& factors);
+
 // Named poses of the lander's arm (joint order 1..6, shared/FACTS.md section 2), for the gravity
 // torques of `scoopsim arm info` and for tests:
 //   zero      all joints at 0: the arm stretched out (the reach-out pose)

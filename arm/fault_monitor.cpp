@@ -67,6 +67,8 @@ FaultMonitor::FaultMonitor(const ArmModel& model, const FaultRules& rules)
 void FaultMonitor::Reset() {
   const size_t n = joints_.size();
   run_start_.assign(n, kNoRun);
+  saturation_time_.assign(n, 0.0);
+  first_saturation_.assign(n, kNoRun);
   torque_on_.assign(n, false);
   position_on_.assign(n, false);
   velocity_on_.assign(n, false);
@@ -111,6 +113,8 @@ FaultStep FaultMonitor::Update(const ArmSample& s) {
     // JOINT_TORQUE_LIMIT: |demanded| >= effort held for torque_hold_time.
     const double demanded = std::abs(x.demanded);
     if (demanded >= j.effort) {
+      saturation_time_[i] += s.step;
+      if (std::isnan(first_saturation_[i])) first_saturation_[i] = s.time;
       if (std::isnan(run_start_[i])) run_start_[i] = s.time;
       if (s.time - run_start_[i] >= rules_.torque_hold_time - kTimeSlack) {
         if (!torque_on_[i]) {

@@ -23,6 +23,10 @@
 //   NO_FORCE_DATA (128): active while the sensor is monitored (ft_joint non-empty) and a sample
 //     has no sensor wrench.
 //
+// Saturation, counted here and only here (the arm driver's report reads it): per joint, the time
+// of the first sample with |demanded_i| >= E_i (first_saturation, NaN: none yet) and the sum of
+// ArmSample::step over every such sample (saturation_time: the time spent at the limit).
+//
 // An event (time, flag, joint, value, limit) is recorded when a condition becomes active (a
 // rising edge); it is not repeated while the condition lasts, and a new one is recorded if it
 // ends and comes back. active bits: the conditions true at this sample; latched bits: every flag
@@ -92,6 +96,7 @@ struct JointSample {
 
 struct ArmSample {
   double time = 0;                                     // [s]
+  double step = 0;  // the time the sample stands for, the step that ended at it [s]
   std::vector<JointSample> joints;                     // dof() entries
   bool has_ft = false;                                 // whether the sensor wrench below is present
   Eigen::Vector3d ft_force = Eigen::Vector3d::Zero();  // [N]
@@ -151,6 +156,10 @@ class FaultMonitor {
   uint64_t latched() const { return latched_; }
   const ReactionCommand& command() const { return command_; }
   const FaultRules& rules() const { return rules_; }
+  // Per joint (see Saturation above): time at |demanded| >= effort [s], and its first sample's
+  // time [s] (NaN: none).
+  const std::vector<double>& saturation_time() const { return saturation_time_; }
+  const std::vector<double>& first_saturation() const { return first_saturation_; }
 
  private:
   void Raise(const ArmSample& s, uint64_t flag, int joint, double value, double limit,
@@ -163,6 +172,7 @@ class FaultMonitor {
   // torque, position and velocity conditions were active at the previous sample.
   std::vector<double> run_start_;
   std::vector<bool> torque_on_, position_on_, velocity_on_;
+  std::vector<double> saturation_time_, first_saturation_;
   bool force_on_ = false, torque_ft_on_ = false, no_data_on_ = false;
   uint64_t latched_ = 0;
   std::vector<FaultEvent> events_;

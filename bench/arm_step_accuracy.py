@@ -36,8 +36,20 @@ def main():
     joints = joints.decode() if isinstance(joints, bytes) else str(joints)
     names = joints.split(",") if joints else [f"j{i}" for i in range(6)]
 
+    def com_rows(f):
+        """The scoop's CoM in the world per row [m]: /scoop/pose turned and shifted by the root
+        attributes scoop_com_x/y/z (quaternion w, x, y, z), or /scoop/com of a table-driven run
+        before issue 41."""
+        if "scoop/com" in f:
+            return f["scoop/com"][:]
+        pose = f["scoop/pose"][:]
+        c = np.array([f.attrs["scoop_com_x"], f.attrs["scoop_com_y"], f.attrs["scoop_com_z"]])
+        w, v = pose[:, 3:4], pose[:, 4:7]
+        t = 2 * np.cross(v, c)
+        return pose[:, :3] + c + w * t + np.cross(v, t)
+
     def on_ref(name):
-        c = cand[name][:]
+        c = com_rows(cand) if name == "scoop/com" else cand[name][:]
         c = c.reshape(len(c), -1)
         out = np.zeros((len(t_ref), c.shape[1]))
         for p in np.unique(p_ref):
@@ -49,7 +61,7 @@ def main():
         return out[keep]
 
     def at_ref(name):
-        r = ref[name][:]
+        r = com_rows(ref) if name == "scoop/com" else ref[name][:]
         return r.reshape(len(r), -1)[keep]
 
     tau_r, tau_c = at_ref("arm/torque_applied"), on_ref("arm/torque_applied")

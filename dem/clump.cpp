@@ -572,17 +572,12 @@ Vec3 ClumpSet::Momentum() const {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The System's clump API (declared in dem/system.h; the step hooks are called from system.cpp).
-
-int System::AddClumpTemplate(const ClumpTemplate& t) { return clumps_.AddShape(t); }
-int System::num_clump_templates() const { return static_cast<int>(clumps_.shapes().size()); }
-const ClumpShape& System::clump_shape(int k) const { return clumps_.shapes()[k]; }
-const Clumps& System::clumps() const { return clumps_.state(); }
-Clumps& System::mutable_clumps() { return clumps_.mutable_state(); }
-int64_t System::num_bodies() const {
-  const Clumps& c = clumps_.state();
-  return static_cast<int64_t>(p_.size() - c.member.size() + c.size());
-}
+// System::AddClump stays here, the one method of dem::System (dem/system.h) outside system.cpp:
+// it places a clump's spheres by quaternion products (pose x principal axes, Rotate), the sums of
+// products that GCC's SLP vectorizer fuses into vfmaddsub despite -ffp-contract=off, so it keeps
+// this file's -mno-fma -mno-avx512f (dem/CMakeLists.txt, top-level CMakeLists.txt) with
+// ComputePrincipalAxes, while system.cpp is built for the machine's full vector units. The rest
+// of the System's clump API (accessors, no arithmetic) is in system.cpp.
 
 int64_t System::AddClump(int shape, const Pose& pose, const Vec3& v, const Vec3& w, int material) {
   const ClumpShape& s = clumps_.shapes()[shape];

@@ -267,6 +267,18 @@ StepStatus System::Step(const std::function<void()>& motion) {
 // ---------------------------------------------------------------------------------------------
 // Triangle-mesh walls (dem/mesh_contact.cpp).
 
+// The clump API (dem/clump.h holds the clump maths; System::AddClump is in clump.cpp, under its
+// compile flags, see there).
+int System::AddClumpTemplate(const ClumpTemplate& t) { return clumps_.AddShape(t); }
+int System::num_clump_templates() const { return static_cast<int>(clumps_.shapes().size()); }
+const ClumpShape& System::clump_shape(int k) const { return clumps_.shapes()[k]; }
+const Clumps& System::clumps() const { return clumps_.state(); }
+Clumps& System::mutable_clumps() { return clumps_.mutable_state(); }
+int64_t System::num_bodies() const {
+  const Clumps& c = clumps_.state();
+  return static_cast<int64_t>(p_.size() - c.member.size() + c.size());
+}
+
 int System::AddMesh(TriangleMesh mesh) {
   ws_->meshes.push_back(internal::MakeMeshState(std::move(mesh), materials_));
   return static_cast<int>(ws_->meshes.size()) - 1;

@@ -6,7 +6,9 @@
 
 Reads the arm series of scoopsim runs of a scene with an `arm:` block (sim/loop/arm_driver.h; SI):
   /arm/time (n) [s], /arm/torque_demanded, /arm/torque_applied, /arm/effort_limit (n x joints)
-  [N m], /arm/fault_latched (n, uint64); /arm/fault_events (e records: time, flag, flag_name,
+  [N m: the URDF's], /arm/effort_derate (n x joints: arm.derate; the limit the arm saturated at is
+  effort_limit x effort_derate; older files have no effort_derate and their effort_limit is that
+  limit already), /arm/fault_latched (n, uint64); /arm/fault_events (e records: time, flag, flag_name,
   joint, joint_name, value, limit; older files: e x 5 float64 time, flag, joint, value, limit,
   present only when a fault was raised); root attributes arm_joints (names, comma-separated) and
   start_time (the dig's start).
@@ -66,6 +68,8 @@ def read_run(path, joint):
         joints = str(f.attrs.get("arm_joints", "")).split(",")
         time = f["arm/time"][()]
         demanded, applied, limit = (f["arm/" + n][()] for n in REQUIRED[1:])
+        if "arm/effort_derate" in f:  # the URDF's limit and the derate beside it
+            limit = limit * f["arm/effort_derate"][()]
         if demanded.shape != (len(time), len(joints)):
             raise InputError("%s: /arm/torque_demanded has shape %s, expected (%d, %d) (one "
                              "column per joint of arm_joints)"
@@ -150,7 +154,8 @@ def main(argv=None):
         flags = "; ".join("%s on %s at %.3f s (|demanded| %.4g N m, limit %.4g N m)"
                           % (flag, joint, t, value, lim)
                           for t, flag, joint, value, lim in run["events"]) or "no fault"
-        print("plot_fault_timeline: %s: %s" % (label, flags))
+        print("plot_fault_timeline: %s: %s; %s's limit %.4g N m"
+              % (label, flags, run["joint"], run["limit"][-1]))
     print("plot_fault_timeline: wrote %s" % args.output)
     return 0
 

@@ -116,6 +116,11 @@ ArmSeries SavedRun::Arm() const {
   a.torque_demanded =
       in.Read<double>("/arm/torque_demanded", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
   a.effort_limit = in.Read<double>("/arm/effort_limit", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
+  if (in.Exists("/arm/effort_derate")) {
+    const std::vector<double> derate =
+        in.Read<double>("/arm/effort_derate", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
+    for (size_t k = 0; k < a.effort_limit.size(); ++k) a.effort_limit[k] *= derate[k];
+  }
   // uint64 since issue 40; float64 in older files (HDF5 converts either).
   a.fault_latched =
       in.Read<uint64_t>("/arm/fault_latched", H5T_NO_CLASS, H5T_NATIVE_UINT64, rows, 1);

@@ -45,7 +45,10 @@ struct ArmSeries {
   std::vector<std::string> joints;      // root attribute arm_joints, base to tip
   std::vector<double> time;             // [s] (n)
   std::vector<double> torque_demanded;  // [N m] (n x joints, row-major)
-  std::vector<double> effort_limit;     // [N m] (n x joints)
+  // The limit the arm saturated at, derated [N m] (n x joints): /arm/effort_limit (the URDF's)
+  // x /arm/effort_derate, or, in files older than the derate's dataset, /arm/effort_limit alone
+  // (which held the derated limit then).
+  std::vector<double> effort_limit;
   std::vector<uint64_t> fault_latched;  // every flag raised so far (n)
 
   bool empty() const { return time.empty() || joints.empty(); }

@@ -880,7 +880,6 @@ void ParseArm(const std::string& file, const YAML::Node& node, Scene* scene) {
       a.derate[j] = m.CheckNumber(it->second, "arm.derate." + it->first.Scalar(),
                                   "a number in (0, 1] (fraction of the URDF's effort limit)",
                                   [](double v) { return v > 0 && v <= 1; });
-      model->joints[j].effort *= a.derate[j];
     }
   }
   a.model = model;

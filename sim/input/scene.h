@@ -126,7 +126,7 @@ enum class ArmReaction { kContinue, kStop, kRetract };
 struct ArmSpec {
   bool enabled = false;
   std::string urdf;                            // resolved against the scene's folder
-  std::shared_ptr<const arm::ArmModel> model;  // the URDF as LoadScene read it, efforts derated
+  std::shared_ptr<const arm::ArmModel> model;  // the URDF as LoadScene read it (its efforts)
   // base_link in the DEM world: given (base.position, base.yaw), or placed at the first pass so
   // that the base-frame point (reach x, reach y, -base_height) lies under the path's start pivot
   // on the bed's surface, base yaw = the dig's heading (the lander's ground plane is 0.172 m
@@ -138,7 +138,10 @@ struct ArmSpec {
   double base_height = 0.172;                // [m]
   std::vector<double> initial;               // IK seed for the path's first pose (dof entries)
   std::vector<std::array<double, 3>> gains;  // p, i, d per joint (default: the lander's)
-  std::vector<double> derate;                // effort-limit factor per joint, in (0, 1]
+  // Effort-limit factor per joint, in (0, 1] (1: as the URDF): the arm saturates and faults at
+  // model effort x derate (arm::Derated), /arm/effort_limit holds the URDF's, /arm/effort_derate
+  // this.
+  std::vector<double> derate;
   int substeps = 1;                          // DEM steps per Bullet step (averaged wrench)
   CouplingTiming timing = CouplingTiming::kBulletFirst;
   // The PID's D term (arm/controller.h): implicit (stable at any step; the default with

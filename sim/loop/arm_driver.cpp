@@ -125,7 +125,7 @@ struct ArmDriver::Impl {
         gravity(scene.gravity),
         dt(scene.time_step),
         k(scene.arm.substeps),
-        model(*scene.arm.model),
+        model(arm::Derated(*scene.arm.model, scene.arm.derate)),
         geometry(scene.arm.model),
         path(scene.dig.trajectory, scene.dig.heading, scene.dig.bite_depth, scene.dig.start_buried),
         dig(scene.dig),
@@ -139,9 +139,12 @@ struct ArmDriver::Impl {
     report.peak_demanded.assign(n, 0.0);
     report.saturation_time.assign(n, 0.0);
     report.first_saturation.assign(n, std::numeric_limits<double>::quiet_NaN());
-    for (const arm::Joint& j : model.joints) {
-      report.joints.push_back(j.name);
-      report.effort_limit.push_back(j.effort);
+    for (int i = 0; i < n; ++i) {
+      report.joints.push_back(model.joints[i].name);
+      report.effort_limit.push_back(model.joints[i].effort);
+      report.urdf_effort_limit.push_back(scene.arm.model->joints[i].effort);
+      report.effort_derate.push_back(
+          i < static_cast<int>(scene.arm.derate.size()) ? scene.arm.derate[i] : 1.0);
     }
   }
 
@@ -402,18 +405,14 @@ struct ArmDriver::Impl {
       next_ft += 1.0 / spec.sensor_rate;
     }
     sample.time = Time(t_b);
+    sample.step = h;
     for (int i = 0; i < n; ++i) {
       arm::JointSample& j = sample.joints[i];
       j.position = bullet->q()[i];
       j.velocity = bullet->qd()[i];
       j.demanded = demanded[i];
       j.applied = applied[i];
-      const double d = std::abs(demanded[i]);
-      report.peak_demanded[i] = std::max(report.peak_demanded[i], d);
-      if (d >= model.joints[i].effort) {
-        report.saturation_time[i] += h;
-        if (std::isnan(report.first_saturation[i])) report.first_saturation[i] = sample.time;
-      }
+      report.peak_demanded[i] = std::max(report.peak_demanded[i], std::abs(demanded[i]));
     }
     sample.has_ft = sensor >= 0;
     sample.ft_force = ft_force;
@@ -429,6 +428,11 @@ struct ArmDriver::Impl {
       }
     }
     report.latched = monitor->latched();
+    // The time at saturation is the monitor's count (arm/fault_monitor.h), not counted again.
+    std::copy(monitor->saturation_time().begin(), monitor->saturation_time().end(),
+              report.saturation_time.begin());
+    std::copy(monitor->first_saturation().begin(), monitor->first_saturation().end(),
+              report.first_saturation.begin());
     if (step.new_command) React(monitor->command());
 
     // Tracking: the scoop against the tool path at the same (unscaled) path time.
@@ -579,7 +583,10 @@ void ArmDriver::Record(H5Output* out, double time) {
   out->AppendRow("/arm/joint_reference", a.q_ref.data(), n);
   out->AppendRow("/arm/torque_demanded", a.demanded.data(), n);
   out->AppendRow("/arm/torque_applied", a.applied.data(), n);
-  out->AppendRow("/arm/effort_limit", a.report.effort_limit.data(), n);
+  // The URDF's limit and the derate beside it (their product saturates; files before the derate
+  // had its own dataset held the product here).
+  out->AppendRow("/arm/effort_limit", a.report.urdf_effort_limit.data(), n);
+  out->AppendRow("/arm/effort_derate", a.report.effort_derate.data(), n);
   const double ft[6] = {a.ft_force.x(),  a.ft_force.y(),  a.ft_force.z(),
                         a.ft_torque.x(), a.ft_torque.y(), a.ft_torque.z()};
   out->AppendRow("/arm/ft_sensor", ft, 6);
@@ -656,7 +663,8 @@ void ArmDriver::Finish(H5Output* out) {
   out->SetCountAttribute("arm_fault_events", r.events.size());
   out->SetCountAttribute("arm_fault_latched", r.latched);
   out->AppendRow("/arm/report/peak_torque", r.peak_demanded.data(), n);
-  out->AppendRow("/arm/report/effort_limit", r.effort_limit.data(), n);
+  out->AppendRow("/arm/report/effort_limit", r.urdf_effort_limit.data(), n);
+  out->AppendRow("/arm/report/effort_derate", r.effort_derate.data(), n);
   out->AppendRow("/arm/report/margin", margin.data(), n);
   out->AppendRow("/arm/report/saturation_time", r.saturation_time.data(), n);
   out->SetAttribute("arm_time_scale", r.time_scale);

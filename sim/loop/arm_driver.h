@@ -48,7 +48,10 @@ namespace sim {
 struct ArmReport {
   std::vector<std::string> joints;
   std::vector<double> peak_demanded;     // max |demanded torque| per joint [N m]
-  std::vector<double> effort_limit;      // per joint, derated [N m]
+  std::vector<double> effort_limit;      // per joint, derated: what saturates [N m]
+  std::vector<double> urdf_effort_limit;  // per joint, the URDF's [N m] (/arm/effort_limit)
+  std::vector<double> effort_derate;      // per joint, arm.derate (/arm/effort_derate); the
+                                          // derated limit is their product
   std::vector<double> saturation_time;   // time with |demanded| >= effort limit, per joint [s]
   std::vector<double> first_saturation;  // time of the first step at or above it [s]; NaN: none
   struct Event {

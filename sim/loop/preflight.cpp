@@ -13,12 +13,11 @@
 #include <vector>
 
 #include "dem/material.h"
-#include "sim/loop/arm_driver.h"
-#include "sim/loop/bed.h"
 #include "sim/files/bed_io.h"
+#include "sim/input/trajectory.h"
+#include "sim/loop/bed.h"
 #include "sim/loop/dig.h"
 #include "sim/loop/scoop_driver.h"
-#include "sim/input/trajectory.h"
 
 namespace sim {
 namespace {
@@ -262,6 +261,8 @@ void CheckDigPath(const Scene& scene, double surface, double clear_z,
   const double spacing = 0.5 * scene.bed.radius_min;
   constexpr int kMinSamples = 400, kMaxSamples = 200000;
   BedContext bed{&mesh, surface, clear_z, scene.time_step, 0.0};
+  // The tool path as placed per pass (whichever driver carries the scoop along it: an arm tracks
+  // it), not the run's driver (MakeScoopDriver, below).
   const std::unique_ptr<KinematicDriver> driver = KinematicDriver::ForDig(dig);
   for (int pass = 1; pass <= dig.passes; ++pass) {
     const double duration = driver->BeginPass(pass, bed).duration;
@@ -409,6 +410,7 @@ RunForecast Preflight(Scene* scene, Work work) {
   std::string time_key = "bed.settle.max_time";
   if (work == Work::kRun) {
     if (scene->dig.enabled) {
+      // The tool path's own length, cheap: an arm's (slowed) plan waits until this is sane.
       const std::unique_ptr<KinematicDriver> driver = KinematicDriver::ForDig(scene->dig);
       for (int pass = 1; pass <= scene->dig.passes; ++pass)
         f.simulated += driver->PlannedDuration(pass, context);
@@ -435,13 +437,13 @@ RunForecast Preflight(Scene* scene, Work work) {
                         " s simulated: the run could never end"
                   : "its planned time has no end");
   }
-  // The arm's plan of each pass (IK), once the run's length is known to be sane (its path is
-  // sampled every 10 ms): a path out of its reach is refused here, before any work (ArmDriver
-  // throws InputError naming arm.base).
-  if (work == Work::kRun && scene->dig.enabled && scene->arm.enabled && !scene->arm.table_driven &&
-      scene->arm.model) {
-    ArmDriver arm(*scene, /*announce=*/false);
-    for (int pass = 1; pass <= scene->dig.passes; ++pass) arm.PlannedDuration(pass, context);
+  // The scene's own driver plans each pass once the run's length is known to be sane (above, on
+  // the tool path's own length; an arm's plan samples its path every 10 ms): an arm's path out
+  // of its reach is refused here, before any work (ArmDriver throws InputError naming arm.base),
+  // and so is a wrench table that does not cover the dig (TableWrench).
+  if (work == Work::kRun && scene->dig.enabled) {
+    const std::unique_ptr<ScoopDriver> driver = MakeScoopDriver(*scene, /*announce=*/false);
+    for (int pass = 1; pass <= scene->dig.passes; ++pass) driver->PlannedDuration(pass, context);
   }
   return f;
 }

@@ -1,6 +1,6 @@
 // Where the scoop is each step: the seam between the run loop (sim::World) and whatever moves the
-// scoop. The kinematic driver follows a prescribed tool path (sim/input/trajectory.h); the Bullet arm
-// and the table-driven arm plug in beside it without touching the loop.
+// scoop. The kinematic driver follows a prescribed tool path (sim/input/trajectory.h); the Bullet
+// arm and the table-driven arm plug in beside it without touching the loop.
 //
 // The loop's calls, for each pass p = 1..passes:
 //   BeginPass(p, bed)            once, on the bed as the previous pass left it
@@ -13,6 +13,14 @@
 // where tau is the time since the pass began. A driver never throws inside the loop.
 // Output: Record(out, time) each time the loop writes a /scoop/ row, Finish(out) once when the run
 // ends (out may be null there: no file), both outside Step()'s hot path.
+//
+// A driver that brings the scoop's wrench itself (the arm on a wrench table, sim/loop/table_arm.h)
+// says so with OwnStep() > 0: the loop then has no bed and steps no DEM. Each of its steps is
+//   MotionAt(tau + h)            as above (the loop's clock moves to the pass's start + tau + h)
+//   w = OwnWrench(pose)          the driver's wrench at the pose MotionAt gave
+//   Feedback(tau + h, w)
+// with h = OwnStep() and tau + h = (steps into the pass) x h, so the clock does not drift.
+// The loop's choice of driver for a scene is made in one place: MakeScoopDriver below.
 #pragma once
 
 #include <memory>
@@ -56,6 +64,16 @@ class ScoopDriver {
   virtual void Feedback(double tau, const dem::MeshWrench& wrench) {
     (void)tau;
     (void)wrench;
+  }
+  // The loop's step [s] when the driver brings its own wrench (no bed, no DEM step); 0 (the
+  // default): the DEM's wrench and the DEM's step.
+  virtual double OwnStep() const { return 0; }
+  // With OwnStep() > 0: the wrench on the scoop at `pose` (l_scoop in the world, the pose
+  // MotionAt just gave), called once a step, as dem::MeshWrench (world axes, torque about
+  // pose.position); its `contacts` is 1 while the driver's source is in contact, else 0.
+  virtual dem::MeshWrench OwnWrench(const dem::Pose& pose) {
+    (void)pose;
+    return {};
   }
   // Whether the current pass has ended at `tau`.
   virtual bool PassOver(double tau) const = 0;
@@ -118,5 +136,12 @@ class KinematicDriver : public ScoopDriver {
   double time_step_ = 0;
   std::unique_ptr<Plan> plan_;  // the current pass
 };
+
+// The scene's driver, chosen here and nowhere else: none without a dig; the arm on a wrench table
+// (arm.wrench: table, TableArmDriver), the arm coupled to the DEM (arm:, ArmDriver), or the
+// scoop on its tool path (KinematicDriver). `announce`: the arm's plan notes on stderr. Throws
+// InputError for a table that does not cover the dig (an arm's path out of its reach is refused
+// when its pass is planned: PlannedDuration, BeginPass).
+std::unique_ptr<ScoopDriver> MakeScoopDriver(const Scene& scene, bool announce = true);
 
 }  // namespace sim

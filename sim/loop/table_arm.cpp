@@ -5,9 +5,6 @@
 #include <cmath>
 #include <limits>
 
-#include "sim/loop/arm_driver.h"
-#include "sim/loop/world.h"
-#include "sim/input/exit_status.h"
 #include "sim/files/h5_output.h"
 #include "sim/loop/progress.h"
 
@@ -100,124 +97,64 @@ dem::MeshWrench TableWrench::At(const dem::Pose& pose) {
   return w;
 }
 
-namespace {
-
-double Seconds(std::chrono::steady_clock::duration d) {
-  return std::chrono::duration<double>(d).count();
-}
-
-void Row3(H5Output* out, const char* name, const double* v) { out->AppendRow(name, v, 3); }
-
-}  // namespace
-
-TableArmResult RunTableArm(const Scene& scene, const RunOptions& options) {
-  InstallStopHandlers();
-  TableWrench source(scene);
+Scene TableArmDriver::ArmScene(const Scene& scene) {
   // The arm steps once per loop step: the scene's arm step as the "DEM step", one substep.
   Scene arm_scene = scene;
-  const double h = scene.arm.step > 0 ? scene.arm.step : scene.arm.substeps * scene.time_step;
-  arm_scene.time_step = h;
+  arm_scene.time_step = scene.arm.step > 0 ? scene.arm.step : scene.arm.substeps * scene.time_step;
   arm_scene.arm.substeps = 1;
   arm_scene.arm.timing = CouplingTiming::kBulletFirst;
-  ArmDriver driver(arm_scene);
+  return arm_scene;
+}
 
-  std::unique_ptr<H5Output> out;
-  if (!options.output.empty()) {
-    out = std::make_unique<H5Output>(options.output, scene.yaml_text, SCOOPSIM_VERSION,
-                                     scene.output.flush_seconds);
+TableArmDriver::TableArmDriver(const Scene& scene, bool announce)
+    : scene_(scene),
+      step_(ArmScene(scene).time_step),
+      source_(scene_),
+      arm_(ArmScene(scene), announce) {}
+
+TableArmDriver::~TableArmDriver() = default;
+
+PassStart TableArmDriver::BeginPass(int pass, const BedContext& bed) {
+  if (!started_) {
+    started_ = true;
+    wall0_ = std::chrono::steady_clock::now();
+  }
+  passes_time_ += last_tau_;
+  last_tau_ = 0;
+  const PassStart start = arm_.BeginPass(pass, bed);
+  source_.BeginPass(pass);
+  return start;
+}
+
+void TableArmDriver::Feedback(double tau, const dem::MeshWrench& wrench) {
+  last_tau_ = tau;
+  arm_.Feedback(tau, wrench);
+}
+
+void TableArmDriver::Record(H5Output* out, double time) {
+  if (out && !attributes_written_) {
     out->SetAttribute("wrench_source", std::string("table"));
-    out->SetAttribute("wrench_table", scene.arm.table);
-    out->SetAttribute("surface", scene.dig.surface);
-    out->SetAttribute("arm_step", h);
+    out->SetAttribute("wrench_table", scene_.arm.table);
+    out->SetAttribute("arm_step", step_);
+    attributes_written_ = true;
   }
-  // No bed: the surface is the scene's, the scoop starts its descent a few radii above it.
-  BedContext bed;
-  bed.mesh = &scene.dig.scoop.geometry;
-  bed.surface = scene.dig.surface;
-  bed.clear_z = scene.dig.surface + 3 * scene.bed.radius_max;
-  bed.time_step = h;
-  bed.start_time = 0;
+  arm_.Record(out, time);
+}
 
-  TableArmResult result;
-  const auto wall0 = std::chrono::steady_clock::now();
-  double time = 0;  // simulated time at the start of the current pass [s]
-  // Snapshots every output.snapshot_every arm steps and at the start: no particles, the scoop and
-  // the arm's links (a replay by `scoopsim render`, the XDMF in ParaView).
-  const int64_t snapshot_every = out ? scene.output.snapshot_every : 0;
-  dem::Particles no_particles;
-  int64_t arm_steps = 0;
-  auto snapshot = [&](double t, const dem::Pose& scoop) {
-    WorldView view;
-    view.meshes.push_back({&scene.dig.scoop.geometry, scoop, MeshRole::kScoop});
-    driver.AddToView(&view);
-    out->WriteSnapshot(t, no_particles, view.meshes);
-  };
-  bool stopped_after = false;
-  for (int pass = 1; pass <= scene.dig.passes && result.exit_status == kExitOk && !stopped_after;
-       ++pass) {
-    driver.BeginPass(pass, bed);
-    source.BeginPass(pass);
-    if (snapshot_every > 0 && pass == 1) snapshot(0.0, driver.MotionAt(0.0).pose);
-    double next_row = 0;
-    int64_t k = 0;
-    double tau = 0;
-    while (!driver.PassOver(tau)) {
-      const double next = static_cast<double>(k + 1) * h;  // no drift from summing h
-      const dem::MeshMotion m = driver.MotionAt(next);
-      driver.Feedback(next, source.At(m.pose));
-      tau = next;
-      ++k;
-      if (snapshot_every > 0 && ++arm_steps % snapshot_every == 0) snapshot(time + tau, m.pose);
-      if (out && tau >= next_row) {
-        next_row += scene.dig.interval;
-        const double t = time + tau, p = pass, rho = source.rho();
-        const dem::Vec3& c = source.com();
-        const double com[3] = {c.x, c.y, c.z};
-        out->AppendRow("/scoop/time", &t, 1);
-        out->AppendRow("/scoop/pass", &p, 1);
-        out->AppendRow("/scoop/rho", &rho, 1);
-        Row3(out.get(), "/scoop/com", com);
-        Row3(out.get(), "/scoop/force_scoop", source.scoop_wrench().data());
-        Row3(out.get(), "/scoop/torque_scoop", source.scoop_wrench().data() + 3);
-        driver.Record(out.get(), t);
-        out->MaybeFlush();
-      }
-      if (options.stop_after > 0 && time + tau >= options.stop_after) {
-        Status("scoopsim: stopped at t = %.6g s (--stop-after); output closed\n", time + tau);
-        stopped_after = true;
-        break;
-      }
-      if ((k & 1023) == 0 && StopRequested()) {
-        Status("scoopsim: stopped by signal %d at t = %.6g s; output closed\n", StopSignal(),
-               time + tau);
-        result.exit_status = kExitStopped;
-        break;
-      }
-    }
-    result.steps += k;
-    time += tau;
-    Status("scoopsim: pass %d: rho %.1f mm (table-driven)\n", pass, 1e3 * source.rho());
-  }
-  result.simulated = time;
-  result.wall = Seconds(std::chrono::steady_clock::now() - wall0);
-  driver.Finish(out.get());
+void TableArmDriver::Finish(H5Output* out) {
+  arm_.Finish(out);
+  const double wall =
+      started_ ? std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count()
+               : 0.0;
+  const int64_t steps = arm_.report().bullet_steps;
+  const double simulated = passes_time_ + last_tau_;
+  const double factor = wall > 0 ? simulated / wall : 0.0;
   Status(
       "scoopsim: table-driven arm: %.4g s simulated in %.3g s wall: %.3g x real time (%lld Bullet "
       "steps of %.3g s, %.3g us each); %lld steps past the table's rho held its last value\n",
-      result.simulated, result.wall, result.RealTimeFactor(), static_cast<long long>(result.steps),
-      h, 1e6 * result.wall / std::max<int64_t>(1, result.steps),
-      static_cast<long long>(source.held_steps()));
-  if (out) {
-    out->SetAttribute("real_time_factor", result.RealTimeFactor());
-    out->SetAttribute("time", result.simulated);
-    out->Close();
-    if (out->snapshot_count() > 0) {
-      Status("scoopsim: wrote %s (ParaView: %s)\n", out->path().c_str(), out->xdmf_path().c_str());
-    } else {
-      Status("scoopsim: wrote %s\n", out->path().c_str());
-    }
-  }
-  return result;
+      simulated, wall, factor, static_cast<long long>(steps), step_,
+      1e6 * wall / std::max<int64_t>(1, steps), static_cast<long long>(source_.held_steps()));
+  if (out) out->SetAttribute("real_time_factor", factor);
 }
 
 }  // namespace sim

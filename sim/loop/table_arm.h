@@ -1,15 +1,16 @@
-// The table-driven arm (issue 20 item 4): the arm of sim/loop/arm_driver.h digs with its scoop wrench
-// taken from a wrench table (sim/files/wrench_table.h) instead of the DEM: no bed, no particles, only
-// Bullet, the path, the IK, the PID and the fault monitor, for torque-limit fault testing far
-// faster than real time. A scene selects it with
+// The table-driven arm (issue 20 item 4): the arm of sim/loop/arm_driver.h digs with its scoop
+// wrench taken from a wrench table (sim/files/wrench_table.h) instead of the DEM: no bed, no
+// particles, only Bullet, the path, the IK, the PID and the fault monitor, for torque-limit fault
+// testing far faster than real time. A scene selects it with
 //   arm: {wrench: table, table: out/lookup/table.h5}      (default wrench: dem)
 // and needs dig.surface (the bed's free surface height [m]: there is no bed to measure it on).
 //
-// The loop (RunTableArm): the ArmDriver is driven through the ScoopDriver calls World makes, with
-// one loop step per Bullet step h = arm.substeps x time_step (the coupled run's arm step; the
-// DEM's time step still comes from bed.radius), the table's wrench standing in for the DEM's:
+// The loop: World::Step, as for every dig (TableArmDriver below, chosen by MakeScoopDriver), with
+// one loop step per Bullet step h = arm.step (else arm.substeps x time_step, the coupled run's arm
+// step; the DEM's time step still comes from bed.radius), the table's wrench standing in for the
+// DEM's and no DEM stepped:
 //   MotionAt(tau + h)        Bullet steps (on the wrench of the previous step, as bullet_first)
-//   TableWrench::At(pose)    the table's wrench at the scoop's new pose
+//   OwnWrench(pose)          TableWrench::At: the table's wrench at the scoop's new pose
 //   Feedback(tau + h, W)     to be applied over the next Bullet step
 // so the arm sees the wrench with the same one-step lag as in the coupled run.
 //
@@ -33,18 +34,19 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <string>
 
 #include "dem/mesh.h"
 #include "dem/system.h"
-#include "sim/input/scene.h"
 #include "sim/files/wrench_table.h"
+#include "sim/input/scene.h"
+#include "sim/loop/arm_driver.h"
+#include "sim/loop/scoop_driver.h"
 
 namespace sim {
-
-struct RunOptions;
 
 // The table's wrench on the scoop along a pass (usable alone, e.g. by tests).
 class TableWrench {
@@ -86,20 +88,47 @@ class TableWrench {
   int64_t held_steps_ = 0;
 };
 
-// What a table-driven run did.
-struct TableArmResult {
-  int exit_status = 0;
-  double simulated = 0;  // [s]
-  double wall = 0;       // [s]
-  int64_t steps = 0;     // Bullet steps
-  double RealTimeFactor() const { return wall > 0 ? simulated / wall : 0; }
-};
+// The arm on the table as a ScoopDriver: the ArmDriver of a copy of the scene with time_step =
+// the arm's step h (arm.step, else arm.substeps x the DEM's step), one substep, bullet_first, its
+// wrench the TableWrench's at each new pose (OwnStep() = h, OwnWrench = TableWrench::At). World
+// runs it as any dig (sim/loop/world.h): no bed, no DEM step, the same /scoop/ and /arm/ rows as a
+// coupled arm dig (/scoop/contacts 0: no particles), plus root attributes wrench_source =
+// "table", wrench_table, arm_step and, at the end, real_time_factor (simulated over wall time
+// from the first pass's start).
+class TableArmDriver : public ScoopDriver {
+ public:
+  // Throws InputError (a table that does not cover the dig: see TableWrench).
+  explicit TableArmDriver(const Scene& scene, bool announce = true);
+  ~TableArmDriver() override;
 
-// `scoopsim run SCENE` for a scene with arm.wrench: table. Output (options.output): the run's
-// HDF5 with /scoop/time, pass, rho, com (world CoM [m]), force_scoop, torque_scoop (the table's
-// wrench applied, l_scoop axes about the CoM) every dig.interval, the /arm/ datasets of
-// sim/loop/arm_driver.h, and root attributes wrench_source = "table", wrench_table, real_time_factor.
-// Prints the arm's report and the real-time factor. Throws InputError (bad table or scene).
-TableArmResult RunTableArm(const Scene& scene, const RunOptions& options);
+  double OwnStep() const override { return step_; }
+  dem::MeshWrench OwnWrench(const dem::Pose& pose) override { return source_.At(pose); }
+  PassStart BeginPass(int pass, const BedContext& bed) override;
+  dem::MeshMotion MotionAt(double tau) override { return arm_.MotionAt(tau); }
+  void Feedback(double tau, const dem::MeshWrench& wrench) override;
+  bool PassOver(double tau) const override { return arm_.PassOver(tau); }
+  double PlannedDuration(int pass, const BedContext& bed) const override {
+    return arm_.PlannedDuration(pass, bed);
+  }
+  void Record(H5Output* out, double time) override;
+  void Finish(H5Output* out) override;
+  void AddToView(WorldView* view) const override { arm_.AddToView(view); }
+
+  const ArmDriver& arm() const { return arm_; }
+  const TableWrench& source() const { return source_; }
+
+ private:
+  static Scene ArmScene(const Scene& scene);  // the scene the arm steps in (above)
+
+  Scene scene_;  // the table scene (TableWrench points into its scoop mesh)
+  double step_;  // h [s]
+  TableWrench source_;
+  ArmDriver arm_;
+  bool attributes_written_ = false;
+  bool started_ = false;
+  std::chrono::steady_clock::time_point wall0_;  // the first pass's start
+  double passes_time_ = 0;  // simulated time of the passes before the current one [s]
+  double last_tau_ = 0;     // of the current pass's last step [s]
+};
 
 }  // namespace sim

@@ -35,6 +35,11 @@ struct World::Dig {
   double force_sum = 0;   // |F| over the rows after first contact, for the mean [N]
   int64_t force_rows = 0;
   double planned = 0;  // all passes [s]
+  // A driver with its own wrench (ScoopDriver::OwnStep() > 0): no bed, no DEM step.
+  double own_step = 0;         // its step [s]; 0: the DEM's wrench and step
+  int64_t steps = 0;           // its steps since the dig began
+  int64_t pass_steps = 0;      // and since the current pass began
+  dem::MeshWrench own_wrench;  // of the last step
 };
 
 namespace {
@@ -206,6 +211,8 @@ void World::LoopFields(Archive& a) {
   a(d.force_rows);
   a(d.planned);
   a(d.bed.start_time);
+  // (A dig without a bed, the arm's on a table, is never checkpointed: Bullet's state is not
+  // saved, RunScene refuses it; its step counts are not listed.)
 }
 
 Checkpoint World::MakeCheckpoint() {
@@ -260,6 +267,7 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver, const DigResume* resum
   dig_ = std::make_unique<Dig>();
   Dig& dig = *dig_;
   dig.driver = std::move(driver);
+  dig.own_step = dig.driver->OwnStep();
   // The mesh and its mass properties were read and checked with the scene (LoadScene).
   dig.mesh = system_->AddMesh(spec.scoop.geometry);
   const double scoop_mass = spec.scoop.mass;
@@ -289,13 +297,15 @@ void World::StartDig(std::unique_ptr<ScoopDriver> driver, const DigResume* resum
   }
   for (size_t i = 0; i < p.size(); ++i) bed_top = std::max(bed_top, p.x[i].z + p.radius[i]);
   double clear_z = bed_top + 2 * r_max;
+  // No bed (a driver with its own wrench): the scoop comes down from a few radii above the surface.
+  if (dig.own_step > 0) clear_z = surface + 3 * r_max;
   const int first_pass = resume ? resume->first_pass : 1;
   if (resume) {
     surface = resume->surface;
     clear_z = resume->clear_z;
   }
   if (out_) out_->SetAttribute("surface", surface);
-  dig.bed = {&system_->mesh(dig.mesh), surface, clear_z, scene_.time_step, system_->time()};
+  dig.bed = {&system_->mesh(dig.mesh), surface, clear_z, StepSize(), system_->time()};
   if (!scene_.obstacles.empty()) {
     AddObstacles();
     dig.bed.mesh = &system_->mesh(dig.mesh);  // AddMesh may have moved the meshes
@@ -327,7 +337,7 @@ DigResume World::ResumePoint() const { return {dig_->pass, dig_->bed.surface, di
 void World::BeginPass() {
   Dig& dig = *dig_;
   const PassStart start = dig.driver->BeginPass(dig.pass, dig.bed);
-  if (start.start_buried) {
+  if (start.start_buried && dig.own_step == 0) {
     // The tool is placed in the bed at its start pose (as the testbed's scoop was inserted by
     // hand): the particles it would overlap are taken out first.
     const std::vector<int64_t> cut = ParticlesTouchingMesh(
@@ -337,6 +347,7 @@ void World::BeginPass() {
            cut.size());
   }
   dig.pass_t0 = system_->time();
+  dig.pass_steps = 0;
   dig.next_row = dig.pass_t0;
   dig.rho = 0;
   dig.rho_path = 0;
@@ -368,6 +379,14 @@ bool World::Done() const {
 }
 
 double World::PlannedDuration() const { return dig_ ? dig_->planned : scene_.duration; }
+
+double World::StepSize() const {
+  return dig_ && dig_->own_step > 0 ? dig_->own_step : scene_.time_step;
+}
+
+int64_t World::StepsDone() const {
+  return dig_ && dig_->own_step > 0 ? dig_->steps : system_->step_count() - step0_;
+}
 
 void World::RecordPlainRow() {
   const double t = system_->time();
@@ -462,7 +481,19 @@ dem::StepStatus World::Step() noexcept {
     return OutputFailed(system.time(), e);
   }
   if (dig_ && Done()) return {};  // the scene's duration bounds Run(), not a plain Step()
-  if (dig_) {
+  if (dig_ && dig_->own_step > 0) {
+    // No bed (sim/loop/scoop_driver.h): the driver's motion and its own wrench, no DEM step; the
+    // clock is the pass's start plus a whole number of the driver's steps.
+    Dig& dig = *dig_;
+    ++dig.steps;
+    ++dig.pass_steps;
+    const double tau = static_cast<double>(dig.pass_steps) * dig.own_step;
+    const dem::MeshMotion motion = dig.driver->MotionAt(tau);
+    system.SetMeshMotion(dig.mesh, motion);
+    system.set_time(dig.pass_t0 + tau);
+    dig.own_wrench = dig.driver->OwnWrench(motion.pose);
+    dig.driver->Feedback(tau, dig.own_wrench);
+  } else if (dig_) {
     // The scoop's pose at the end of the coming step, where Step() evaluates forces. The driver
     // (the arm's Bullet step) runs inside the step, beside the pair forces (dem/system.h): the
     // DEM does not read the scoop's pose before then.
@@ -499,7 +530,8 @@ void World::Record() {
     }
   } else {
     Dig& dig = *dig_;
-    const dem::MeshWrench mw = system.mesh_wrench(dig.mesh);
+    // The wrench on the scoop: the particles' (their contacts), or the driver's own without a bed.
+    const dem::MeshWrench mw = dig.own_step > 0 ? dig.own_wrench : system.mesh_wrench(dig.mesh);
     const dem::Pose& pose = system.mesh_motion(dig.mesh).pose;
     dig.wrench = ComputeScoopWrench(mw, pose, dig.com_scoop, dig.body);
     const dem::Vec3 com = dem::Apply(pose, dig.com_scoop);
@@ -524,7 +556,7 @@ void World::Record() {
       RecordDigRow();
     }
   }
-  const int64_t steps = system.step_count() - step0_;
+  const int64_t steps = StepsDone();
   if (out_ && scene_.output.snapshot_every > 0 && steps % scene_.output.snapshot_every == 0)
     out_->WriteSnapshot(system.time(), system.particles(), View().meshes);
   // A pass ends when its driver says so; the next one begins at once.
@@ -576,7 +608,7 @@ void World::StartPlain() {
 
 void World::PlanSnapshots() {
   if (!out_ || scene_.output.snapshot_every <= 0) return;
-  const double steps = PlannedDuration() / scene_.time_step;
+  const double steps = PlannedDuration() / StepSize();
   const double every = static_cast<double>(scene_.output.snapshot_every);
   // (A plan beyond what a file can index compactly only sets the most room there is.)
   out_->PlanSnapshots(static_cast<int64_t>(std::min(steps / every, 1e6)) + 2);
@@ -596,7 +628,7 @@ RunResult World::Run(const RunControl& control) {
   const double frame_every = control.frame_every > 0 ? control.frame_every
                              : dig_                  ? 0.05
                                                      : scene_.output.interval;
-  const double slack = 1e-3 * scene_.time_step;
+  const double slack = 1e-3 * StepSize();
   double next_frame = system.time();
   auto maybe_frame = [&] {
     if (!control.on_frame || system.time() < next_frame - slack) return;
@@ -604,7 +636,7 @@ RunResult World::Run(const RunControl& control) {
     while (next_frame <= system.time() + slack) {
       const double after = next_frame + frame_every;
       if (!(after > next_frame)) {  // a spacing below the clock's resolution: every step
-        next_frame = system.time() + slack + scene_.time_step;
+        next_frame = system.time() + slack + StepSize();
         break;
       }
       next_frame = after;
@@ -649,7 +681,7 @@ RunResult World::Run(const RunControl& control) {
       result.stopped_at_pass = halted_after_pass_;
       break;
     }
-    const int64_t steps = system.step_count() - step0_;
+    const int64_t steps = StepsDone();
     // Every step (a clock read): a killed run loses at most flush_seconds of rows, however long
     // its steps take.
     if (out_) {
@@ -699,7 +731,7 @@ RunResult World::Run(const RunControl& control) {
   result.wall = Seconds(std::chrono::steady_clock::now() - wall0);
   if (dig_) {
     summary_.mean_force = dig_->force_rows > 0 ? dig_->force_sum / dig_->force_rows : 0.0;
-    summary_.steps = system.step_count() - step0_;
+    summary_.steps = StepsDone();
     summary_.simulated = system.time() - t_start_;
     Status(
         "scoopsim: dig: %lld particles, %lld steps, %.4g s simulated (t = %.4f to %.4f s); "
@@ -709,9 +741,13 @@ RunResult World::Run(const RunControl& control) {
         summary_.simulated, t_start_, system.time(), summary_.peak_force, summary_.mean_force,
         summary_.peak_torque, static_cast<long long>(system.neighbor_stats().builds),
         static_cast<double>(particle_steps_) / std::max<int64_t>(1, summary_.steps));
-    Status("scoopsim: dig: %.1f s wall (%.3g x real time): %s\n", result.wall,
-           summary_.simulated / std::max(result.wall, 1e-9),
-           PhaseBreakdown(PhasesSince(system.phase_times(), phases0), result.wall).c_str());
+    // (Without a bed the DEM's phases took no time.)
+    const std::string phases =
+        dig_->own_step > 0
+            ? std::string()
+            : ": " + PhaseBreakdown(PhasesSince(system.phase_times(), phases0), result.wall);
+    Status("scoopsim: dig: %.1f s wall (%.3g x real time)%s\n", result.wall,
+           summary_.simulated / std::max(result.wall, 1e-9), phases.c_str());
     if (const dem::ThreadGovernor* g = system.governor(); g != nullptr && g->configured() > 1) {
       Status("scoopsim: threads: %d, fewer on %.1f%% of steps (%lld probes, %lld switches)\n",
              g->configured(), 100.0 * g->steps_fewer() / std::max<int64_t>(1, g->steps()),

@@ -1,11 +1,13 @@
 // The run loop: one World owns the DEM system, the scoop and its driver, and the outputs, and
 // advances them together one step at a time. Every command goes through it: `scoopsim bed`
-// (Pour), `scoopsim run` with and without a dig, the shape study and `bench step`.
+// (Pour), `scoopsim run` with and without a dig (the arm's on a wrench table too), the sweeps and
+// studies and `bench step`.
 //
 //   World world(scene, threads);
-//   world.LoadBed(path) or world.Pour(...)           the bed
+//   world.LoadBed(path) or world.Pour(...)           the bed (none for a driver with its own
+//                                                    wrench: ScoopDriver::OwnStep() > 0)
 //   world.OpenOutput(path) / UseOutput(&out)         optional: HDF5 rows, snapshots
-//   world.StartDig(std::make_unique<KinematicDriver>(...))   optional: the scoop
+//   world.StartDig(MakeScoopDriver(scene))           optional: the scoop and its driver
 //   RunResult r = world.Run(control);                steps until the end, a signal or a fault
 //
 // Step() is the loop's body, usable on its own: it never throws and reports the step's health.
@@ -142,6 +144,8 @@ class World {
 
   // Simulated time the whole run is planned to take from the start [s].
   double PlannedDuration() const;
+  // The loop's step [s]: the DEM's, or the driver's when it brings its own wrench (no bed).
+  double StepSize() const;
   const dem::System& system() const { return *system_; }
   dem::System& mutable_system() { return *system_; }
   const DigSummary& dig_summary() const { return summary_; }
@@ -151,6 +155,7 @@ class World {
   struct Dig;
   void StartPlain();
   void PlanSnapshots();  // tells the output how many snapshots the planned run makes
+  int64_t StepsDone() const;  // loop steps since the run (plain or dig) began
   void Record();         // the rows, snapshots and pass changes that follow a step (may throw)
   void RecordPlainRow();
   void RecordDigRow();
@@ -182,7 +187,7 @@ class World {
   std::function<void()> on_keep_;
 };
 
-// How a command runs a scene (sim::RunScene, sim::MakeBed, sim::RunTableArm).
+// How a command runs a scene (sim::RunScene, sim::MakeBed).
 struct RunOptions {
   int threads = 0;     // 0 = all cores
   std::string output;  // output HDF5 path

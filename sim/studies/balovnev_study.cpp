@@ -127,7 +127,7 @@ int RunBalovnevStudy(const Scene& scene_in, const BalovnevStudyOptions& options)
     solid_fraction = SolidFraction(p, lo, hi);
     const int material = scene.materials.Find(scene.bed.material);
     density = scene.materials[material].density;
-    world.StartDig(KinematicDriver::ForDig(scene.dig));
+    world.StartDig(MakeScoopDriver(scene));
     RunControl control;
     control.quiet = options.quiet;
     const RunResult result = world.Run(control);

@@ -13,18 +13,15 @@
 #include <filesystem>
 #include <memory>
 
-#include "arm/bullet_arm.h"
-#include "arm/controller.h"
-#include "arm/kinematics.h"
-#include "sim/loop/arm_driver.h"
-#include "sim/loop/bed.h"
+#include "arm/arm_model.h"
 #include "sim/files/bed_io.h"
 #include "sim/files/checkpoint.h"
-#include "sim/input/exit_status.h"
 #include "sim/files/h5_output.h"
 #include "sim/files/internal_h5.h"
+#include "sim/input/exit_status.h"
+#include "sim/loop/arm_driver.h"
+#include "sim/loop/bed.h"
 #include "sim/loop/progress.h"
-#include "sim/loop/table_arm.h"
 #include "sim/loop/world.h"
 
 namespace sim {
@@ -135,10 +132,8 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
 }
 
 int RunScene(const Scene& scene, const RunOptions& options) {
-  // The arm on a wrench table: no bed, no DEM (sim/loop/table_arm.h).
   RefuseOutputOverScene(options.output, scene);
   CheckOutputPath(options.output);
-  if (scene.arm.table_driven) return RunTableArm(scene, options).exit_status;
   InstallStopHandlers();
   // The output first, before any work: refused when it is one of the run's inputs (above) or
   // another process writes it (locked from here to the end).
@@ -149,15 +144,12 @@ int RunScene(const Scene& scene, const RunOptions& options) {
                      "(Bullet's solver state is not saved)");
   }
   const std::string restart = CheckpointPath(options.output);
+  // The scene's driver (none without a dig): the kinematic path, the arm coupled to the DEM or
+  // the arm on a wrench table, which brings its own wrench and needs no bed.
+  std::unique_ptr<ScoopDriver> driver = MakeScoopDriver(scene);
+  const bool needs_bed = !driver || driver->OwnStep() == 0;
   World world(scene, options.threads);
   world.mutable_system().set_adaptive_threads(options.adaptive_threads);
-  auto driver = [&]() -> std::unique_ptr<ScoopDriver> {
-    if (!scene.dig.enabled) return nullptr;
-    // The scoop on the arm (Bullet, coupled every step) when the scene has an arm, else on its
-    // path.
-    if (scene.arm.enabled) return std::unique_ptr<ScoopDriver>(new ArmDriver(scene));
-    return KinematicDriver::ForDig(scene.dig);
-  };
   if (options.resume) {
     const Checkpoint checkpoint = ReadCheckpoint(restart);
     if (checkpoint.scene_yaml != scene.yaml_text) {
@@ -166,19 +158,21 @@ int RunScene(const Scene& scene, const RunOptions& options) {
     }
     const OutputCursor cursor = DecodeCursor(checkpoint.output_state, restart);
     world.OpenOutput(options.output, &cursor);
-    world.ResumeFrom(checkpoint, driver(), restart);
+    world.ResumeFrom(checkpoint, std::move(driver), restart);
     Status("scoopsim: going on from %s at t = %.6g s\n", restart.c_str(), checkpoint.time);
   } else {
     world.OpenOutput(options.output);
-    world.KeepPour(PourPath(options.output));
-    if (!scene.bed.file.empty()) {
-      world.LoadBed(scene.bed.file);  // already resolved against the scene's folder
-    } else {
-      SettleReport r;
-      const int status = world.Pour(options.quiet, &r);
-      if (status != kExitOk) return status;
+    if (needs_bed) {
+      world.KeepPour(PourPath(options.output));
+      if (!scene.bed.file.empty()) {
+        world.LoadBed(scene.bed.file);  // already resolved against the scene's folder
+      } else {
+        SettleReport r;
+        const int status = world.Pour(options.quiet, &r);
+        if (status != kExitOk) return status;
+      }
     }
-    if (scene.dig.enabled) world.StartDig(driver());
+    if (driver) world.StartDig(std::move(driver));
   }
   RunControl control = Control(options);
   if (checkpoints) {
@@ -266,7 +260,7 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
     const auto dig0 = std::chrono::steady_clock::now();
     const double cpu0 = CpuSeconds();
     world.UseOutput(&out);
-    world.StartDig(KinematicDriver::ForDig(s.dig));
+    world.StartDig(MakeScoopDriver(s));
     RunControl control;
     control.quiet = options.quiet;
     status = world.Run(control).exit_status;
@@ -380,40 +374,58 @@ int BenchSettle(const BenchSettleOptions& options) {
   return 0;
 }
 
-// The arm of `bench step --arm`: the lander's PID, D term implicit, holding the digging pose
-// against gravity and a constant 20 N on the scoop, one Bullet step per DEM step (a coupled
-// dig's Advance: PID, wrench, Bullet's step, the scoop's pose and twist).
+// The arm of `bench step --arm`: the ArmDriver of a coupled dig (sim/loop/arm_driver.h), on the
+// bench scene given an arm of the URDF (`--set arm.urdf=URDF --set arm.d_term=implicit`: the
+// lander's gains, the D term implicit, one Bullet step per DEM step) and a dig that holds the
+// scoop buried at the box's centre, pushed by a constant 20 N along world -x at its origin. Each
+// DEM step is one MotionAt (the arm's step: PID, wrench, Bullet's step, the fault monitor, the
+// sensor, the scoop's pose and twist) and one Feedback, as in a coupled dig; the bed never sees
+// the scoop, so its state is the plain run's.
 struct BenchArm {
-  arm::ArmModel model;
-  std::unique_ptr<arm::BulletArm> bullet;
-  std::unique_ptr<arm::JointPid> pid;
-  arm::JointServo servo;
-  Eigen::VectorXd q_ref, qd_ref;
+  Scene scene;
+  std::unique_ptr<ArmDriver> driver;
+  double dt = 0;
+  int64_t steps = 0;
   double seconds = 0;  // spent stepping it [s]
   double sink = 0;     // keeps the pose and twist reads
-  BenchArm(const std::string& urdf, const dem::Vec3& gravity) : model(arm::LoadArmModel(urdf)) {
-    if (model.dof() != 6)
+  BenchArm(const std::string& scene_path, const std::string& urdf, const dem::System& bed) {
+    std::error_code ec;
+    const std::filesystem::path absolute = std::filesystem::absolute(urdf, ec);
+    scene = LoadScene(scene_path,
+                      {"arm.urdf=" + (ec ? urdf : absolute.string()), "arm.d_term=implicit"});
+    if (scene.arm.model->dof() != 6)
       throw InputError(urdf + ": bench step --arm: expected the lander's six-joint arm");
-    arm::BulletArmOptions options;
-    options.gravity = Eigen::Vector3d(gravity.x, gravity.y, gravity.z);
-    bullet = std::make_unique<arm::BulletArm>(model, options);
-    pid = std::make_unique<arm::JointPid>(model, arm::LanderGains());
-    q_ref = Eigen::Map<const Eigen::VectorXd>(arm::kLanderPoses[3].q.data(), 6);
-    qd_ref = Eigen::VectorXd::Zero(6);
-    bullet->SetJointState(q_ref);
-    pid->Preload(arm::GravityTorques(model, q_ref, options.gravity));
+    DigSpec& dig = scene.dig;
+    dig.enabled = true;
+    if (dig.scoop.geometry.vertices.empty()) {
+      // No scoop in the bench scene: the path places l_scoop's origin, a small triangle there.
+      dig.scoop.geometry.vertices = {{0, 0, 0}, {0.01, 0, 0}, {0, 0.01, 0}};
+      dig.scoop.geometry.triangles = {{0, 1, 2}};
+    }
+    dig.start_buried = true;
+    dig.trajectory = TrajectorySpec{};
+    dig.trajectory.initial_pitch = M_PI / 2;  // blade down, as the paper's paths
+    dig.trajectory.pivot_start = 0.5 * (scene.box_min + scene.box_max);
+    dig.trajectory.moves = {Hold("hold", 1.0)};  // then held: the bench may run past it
+    scene.arm.substeps = 1;
+    scene.arm.implicit_d = true;
+    driver = std::make_unique<ArmDriver>(scene, /*announce=*/false);
+    // The bed's top as its surface (the arm's base stands on it, under the scoop).
+    double surface = scene.box_min.z;
+    const dem::Particles& p = bed.particles();
+    for (size_t i = 0; i < p.size(); ++i) surface = std::max(surface, p.x[i].z + p.radius[i]);
+    dt = scene.time_step;
+    BedContext context{&dig.scoop.geometry, surface, surface, dt, 0.0};
+    driver->BeginPass(1, context);
   }
-  void Step(double dt) {
+  void Step() {
     const auto t0 = std::chrono::steady_clock::now();
-    pid->ComputeServo(q_ref, qd_ref, bullet->q(), bullet->qd(), dt, &servo);
-    bullet->SetJointServo(servo);
-    arm::Wrench w;
-    w.force = Eigen::Vector3d(-20, 0, 0);
-    w.point = bullet->BodyPose(6).translation();
-    bullet->ApplyWrench(6, w);
-    bullet->Step(dt);
-    const arm::Twist twist = bullet->BodyTwist(6);
-    sink += bullet->BodyPose(6).translation().x() + twist.linear.x();
+    const double tau = static_cast<double>(++steps) * dt;
+    const dem::MeshMotion m = driver->MotionAt(tau);
+    dem::MeshWrench w;
+    w.force = {-20, 0, 0};  // at the scoop's origin: no torque about it
+    driver->Feedback(tau, w);
+    sink += m.pose.position.x + m.velocity.x;
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 };
@@ -425,7 +437,8 @@ int BenchStep(const BenchStepOptions& options) {
   world.LoadState(scene.bed.file);
   const dem::System* system = &world.system();
   std::unique_ptr<BenchArm> bench_arm;
-  if (!options.arm.empty()) bench_arm = std::make_unique<BenchArm>(options.arm, scene.gravity);
+  if (!options.arm.empty())
+    bench_arm = std::make_unique<BenchArm>(options.scene, options.arm, world.system());
   auto run = [&](int64_t steps, int64_t* awake_sum) {
     for (int64_t k = 0; k < steps; ++k) {
       const dem::StepStatus status = world.Step();
@@ -433,7 +446,7 @@ int BenchStep(const BenchStepOptions& options) {
         Status("scoopsim: simulation unstable: %s\n", status.message.c_str());
         return false;
       }
-      if (bench_arm) bench_arm->Step(scene.time_step);
+      if (bench_arm) bench_arm->Step();
       *awake_sum += system->neighbor_stats().awake;
     }
     return true;

@@ -153,9 +153,9 @@ struct BenchStepOptions {
   int64_t warm = 400;  // steps run before the timing (sleep checks settle, a rebuild or two)
   int64_t steps = 1500;
   int threads = 0;
-  // A URDF: its arm (arm::BulletArm, the lander's PID with its D term implicit, holding the
-  // lander's digging pose under a constant 20 N on the scoop) steps once per DEM step, as a
-  // coupled dig's arm does at arm.substeps 1; its time is taken apart (arm_ms_per_step).
+  // A URDF: its arm (the ArmDriver of a coupled dig, the lander's PID with its D term implicit,
+  // holding the scoop buried at the box's centre under a constant 20 N) steps once per DEM step,
+  // as a coupled dig's arm does at arm.substeps 1; its time is taken apart (arm_ms_per_step).
   std::string arm;
 };
 // `scoopsim bench step SCENE`: the cost of the scene's step from its saved bed, scoop or not (the

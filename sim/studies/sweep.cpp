@@ -948,7 +948,7 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& 
         out = std::make_unique<H5Output>(paths.Pass(pass).string(), scene.yaml_text,
                                          SCOOPSIM_VERSION, scene.output.flush_seconds, &cursor);
         world.UseOutput(out.get());
-        world.ResumeFrom(*checkpoint, KinematicDriver::ForDig(scene.dig), restart.string());
+        world.ResumeFrom(*checkpoint, MakeScoopDriver(scene), restart.string());
         checkpoint.reset();
         Status("scoopsim: sweep: case %s goes on from %s at t = %.6g s\n", c.name.c_str(),
                restart.c_str(), world.system().time());
@@ -958,7 +958,7 @@ CaseOutcome RunCase(const Sweep& sweep, const SweepCase& c, const SweepOptions& 
                                          SCOOPSIM_VERSION, scene.output.flush_seconds);
         world.UseOutput(out.get());
         const DigResume resume{pass, status.surface, status.clear_z};
-        world.StartDig(KinematicDriver::ForDig(scene.dig), pass > 1 ? &resume : nullptr);
+        world.StartDig(MakeScoopDriver(scene), pass > 1 ? &resume : nullptr);
       }
       RunControl control;
       control.quiet = quiet;

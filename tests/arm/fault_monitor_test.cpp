@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace arm {
 namespace {
 
@@ -76,6 +78,33 @@ TEST(FaultMonitorTest, BrokenRunRestartsTheHold) {
     monitor.Update(s);
   }
   EXPECT_TRUE(monitor.events().empty());
+}
+
+// Saturation is counted by the monitor alone (the arm driver's report reads it): j_shou_pitch
+// (effort 101 N m) demanded 150 N m (and -150: |demanded| counts) at samples 10-89 and 120-129 of
+// 1 ms steps, 101 N m exactly at sample 130 (at the limit counts), 100 N m elsewhere: its
+// saturation time is the sum of the 91 samples' steps, 91 x 1e-3 s (to 1e-15 s), its first
+// saturation the time of sample 10 exactly; every other joint 0 s and NaN; Reset() clears them.
+TEST(FaultMonitorTest, SaturationTimeIsTheSumOfTheStepsAtOrAboveTheLimit) {
+  FaultMonitor monitor(Lander());
+  const double dt = 1e-3;
+  for (int k = 0; k < 200; ++k) {
+    ArmSample s = Quiet(k * dt);
+    s.step = dt;
+    const bool over = (k >= 10 && k < 90) || (k >= 120 && k < 130);
+    s.joints[1].demanded = over ? (k % 2 ? 150.0 : -150.0) : k == 130 ? 101.0 : 100.0;
+    monitor.Update(s);
+  }
+  ASSERT_EQ(monitor.saturation_time().size(), 6u);
+  EXPECT_NEAR(monitor.saturation_time()[1], 91 * dt, 1e-15);
+  EXPECT_EQ(monitor.first_saturation()[1], 10 * dt);
+  for (int i : {0, 2, 3, 4, 5}) {
+    EXPECT_EQ(monitor.saturation_time()[i], 0.0) << i;
+    EXPECT_TRUE(std::isnan(monitor.first_saturation()[i])) << i;
+  }
+  monitor.Reset();
+  EXPECT_EQ(monitor.saturation_time()[1], 0.0);
+  EXPECT_TRUE(std::isnan(monitor.first_saturation()[1]));
 }
 
 // POSITION_LIMIT: j_shou_pitch (upper 2.2) at 2.25 raises it once (value 2.25, limit 2.2);

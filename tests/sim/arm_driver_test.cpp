@@ -35,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "arm/arm_model.h"
 #include "sim/files/arm_geometry.h"
 #include "sim/files/bed_io.h"
 #include "sim/files/h5_output.h"
@@ -133,6 +134,20 @@ DigRun Dig(const sim::Scene& scene, const std::string& bed, bool with_arm, int t
   run.torque = rec->torque;
   if (out) out->Close();
   return run;
+}
+
+// A float64 dataset of a run file, row-major.
+std::vector<double> DoubleRows(const std::string& path, const std::string& name) {
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t d = H5Dopen2(f, name.c_str(), H5P_DEFAULT);
+  EXPECT_GE(d, 0) << name;
+  const hid_t space = H5Dget_space(d);
+  std::vector<double> rows(static_cast<size_t>(H5Sget_simple_extent_npoints(space)));
+  if (!rows.empty()) H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, rows.data());
+  H5Sclose(space);
+  H5Dclose(d);
+  H5Fclose(f);
+  return rows;
 }
 
 // /arm/fault_bits (uint64 rows) of a run file.
@@ -355,10 +370,33 @@ TEST(ArmDriverTest, WornMotorDiggingIceRaisesJointTorqueLimit) {
   sim::World probe(scene, 1);
   probe.LoadBed(bed);
   const double start = probe.system().time();
-  const DigRun run = Dig(scene, bed, true, 2);
+  const std::string output = (TempDir() / "weak_joint.h5").string();
+  const DigRun run = Dig(scene, bed, true, 2, output);
   // Holding still (0-0.2 s) is within the derated limit; the push starts at 0.2 s.
   ExpectTorqueLimitOnProxPitch(run, scene, 0.2, 0.21, start);
   EXPECT_NEAR(run.arm.effort_limit[kProxPitch], 0.16 * 73.0, 1e-9);
+  // The URDF's limit is kept (73 N m in the scene's model and in /arm/effort_limit), the derate
+  // beside it (/arm/effort_derate); their product, bit for bit, is the limit the event was raised
+  // against and the one readers (sim::SavedRun: render's torque bars) get.
+  constexpr int kJoints = 6;
+  EXPECT_EQ(scene.arm.model->joints[kProxPitch].effort, 73.0);
+  EXPECT_EQ(scene.arm.derate[kProxPitch], 0.16);
+  const std::vector<double> limit = DoubleRows(output, "/arm/effort_limit");
+  const std::vector<double> derate = DoubleRows(output, "/arm/effort_derate");
+  ASSERT_EQ(limit.size(), derate.size());
+  ASSERT_GE(limit.size(), static_cast<size_t>(kJoints));
+  for (size_t k = 0; k < limit.size(); ++k) {
+    const int j = static_cast<int>(k % kJoints);
+    EXPECT_EQ(limit[k], scene.arm.model->joints[j].effort) << k;
+    EXPECT_EQ(derate[k], j == kProxPitch ? 0.16 : 1.0) << k;
+  }
+  ASSERT_FALSE(run.arm.events.empty());
+  EXPECT_EQ(73.0 * 0.16, run.arm.events.front().limit);
+  EXPECT_EQ(73.0 * 0.16, run.arm.effort_limit[kProxPitch]);
+  const sim::ArmSeries saved = sim::SavedRun(output).Arm();
+  ASSERT_EQ(saved.effort_limit.size(), limit.size());
+  EXPECT_EQ(saved.effort_limit[kProxPitch], 73.0 * 0.16);
+  EXPECT_EQ(saved.effort_limit[kProxPitch - 1], scene.arm.model->joints[kProxPitch - 1].effort);
 }
 
 // Reaction retract: the boulder scene with arm.faults.reaction retract (up 5 cm at 2 cm/s, then a

@@ -1,16 +1,21 @@
-// The table-driven arm (sim/loop/table_arm.cpp): the lander's arm in Bullet, its scoop wrench from a
-// synthetic wrench table (written by the test as case files, built with sim::BuildWrenchTable),
-// no DEM. The scene: the arm of scenes/arm/nominal_snow.yaml, the scoop started buried (first
-// contact at once).
+// The table-driven arm (sim/loop/table_arm.cpp): the lander's arm in Bullet, its scoop wrench from
+// a synthetic wrench table (written by the test as case files, built with sim::BuildWrenchTable),
+// no DEM, run by `scoopsim run` (sim::RunScene: World's loop with sim::TableArmDriver). The
+// scene: the arm of scenes/arm/nominal_snow.yaml, the scoop started buried (first contact at
+// once).
 //   - steady joint torques: holding still under a constant table wrench W, the demanded torques
 //     differ from those under a zero table by -J^T W (arm::PointJacobian at the CoM, world axes,
 //     at the held pose), within 0.5% of max |J^T W| (what is left of the settling); on the
 //     lander's URDF with its joint friction set to 0 (a joint held by Coulomb friction takes up
 //     any change below its friction, 0.3-4.6 N m, so its demanded torque need not change);
-//   - rho: on a 0.05 m push it is the running maximum of the CoM's travel along the trench since
-//     first contact (at each row, within 1 um above the maximum over the rows), ends within 2 mm of
-//     0.05 m, and the wrench applied is the table's at that rho (a wrench linear in rho: to 1e-9
-//     relative);
+//   - rho: on a 0.05 m push the wrench applied is the table's at the running maximum of the CoM's
+//     travel along the trench since first contact (the CoM from /scoop/pose and the scoop_com
+//     attributes; the maximum over every step lies within 1 um above the one over the rows; a
+//     wrench linear in rho: to k x 1 um + 1e-9), the run's /scoop/rho is the CoM's displacement
+//     along the trench since first contact (as in a coupled dig, to 1e-12 m) and ends within 2 mm
+//     of 0.05 m;
+//   - the layout: the /scoop/ datasets of a coupled dig (pose, force_body, contacts all 0: no
+//     particles), no /scoop/com;
 //   - a table wrench past a joint's capacity raises JOINT_TORQUE_LIMIT on the joint that the
 //     Jacobian says needs the largest share of its effort (the others stay under 90% of theirs);
 //   - out of the domain: a bite depth outside the table's, a material or a pass it does not hold,
@@ -34,11 +39,12 @@
 #include <vector>
 
 #include "arm/kinematics.h"
-#include "sim/studies/commands.h"
+#include "dem/transform.h"
 #include "sim/files/h5_output.h"
 #include "sim/files/saved_run.h"
-#include "sim/input/scene.h"
 #include "sim/files/wrench_table.h"
+#include "sim/input/scene.h"
+#include "sim/studies/commands.h"
 #include "tests/cli_util.h"
 
 namespace {
@@ -151,7 +157,7 @@ double RootAttribute(const std::string& path, const std::string& name) {
 struct TableRun {
   sim::Scene scene;
   std::string output;
-  sim::TableArmResult result;
+  int exit_status = 0;
 };
 
 TableRun RunTable(const std::string& name, const std::string& scene_text, int threads = 1) {
@@ -161,7 +167,7 @@ TableRun RunTable(const std::string& name, const std::string& scene_text, int th
   options.output = r.output;
   options.quiet = true;
   options.threads = threads;
-  r.result = sim::RunTableArm(r.scene, options);
+  r.exit_status = sim::RunScene(r.scene, options);
   return r;
 }
 
@@ -236,8 +242,8 @@ const TableRun& HoldConstant() {
 TEST(TableArm, SteadyJointTorquesChangeByMinusJacobianTransposeTimesTheTableWrench) {
   const TableRun& zero = HoldZero();
   const TableRun& loaded = HoldConstant();
-  ASSERT_EQ(zero.result.exit_status, 0);
-  ASSERT_EQ(loaded.result.exit_status, 0);
+  ASSERT_EQ(zero.exit_status, 0);
+  ASSERT_EQ(loaded.exit_status, 0);
   constexpr int kRows = 50;  // the last 50 ms of the hold
   const Eigen::VectorXd tau0 = TailMean(zero.output, "/arm/torque_demanded", kRows);
   const Eigen::VectorXd tau1 = TailMean(loaded.output, "/arm/torque_demanded", kRows);
@@ -246,40 +252,75 @@ TEST(TableArm, SteadyJointTorquesChangeByMinusJacobianTransposeTimesTheTableWren
   const double tol = 5e-3 * expected.cwiseAbs().maxCoeff();
   for (int i = 0; i < q.size(); ++i)
     EXPECT_NEAR(tau1[i] - tau0[i], expected[i], tol) << "joint " << i;
-  // The wrench applied is the table's, in its frame.
+  // The wrench applied is the table's, in its frame (turned to world axes and back for the row:
+  // a few ulp of |F|).
   int w = 0;
   const std::vector<double> f = ReadRows(loaded.output, "/scoop/force_scoop", &w);
-  EXPECT_EQ(f[f.size() - 3], kW[0]);
-  EXPECT_EQ(f[f.size() - 1], kW[2]);
+  const double ulps = 1e-14 * std::hypot(kW[0], kW[1], kW[2]);
+  EXPECT_NEAR(f[f.size() - 3], kW[0], ulps);
+  EXPECT_NEAR(f[f.size() - 1], kW[2], ulps);
 }
 
-TEST(TableArm, RhoIsTheRunningMaximumOfTheCoMTravelAlongTheTrenchAndPicksTheTableRow) {
+// The CoM of each /scoop/pose row (world) [m], 3 per row.
+std::vector<double> ComRows(const TableRun& r) {
+  int w = 0;
+  const std::vector<double> pose = ReadRows(r.output, "/scoop/pose", &w);
+  const dem::Vec3 c{RootAttribute(r.output, "scoop_com_x"), RootAttribute(r.output, "scoop_com_y"),
+                    RootAttribute(r.output, "scoop_com_z")};
+  std::vector<double> com;
+  for (size_t i = 0; i + 7 <= pose.size(); i += 7) {
+    dem::Pose p;
+    p.position = {pose[i], pose[i + 1], pose[i + 2]};
+    p.orientation = {pose[i + 3], pose[i + 4], pose[i + 5], pose[i + 6]};
+    const dem::Vec3 x = dem::Apply(p, c);
+    com.insert(com.end(), {x.x, x.y, x.z});
+  }
+  return com;
+}
+
+TEST(TableArm, TheTableRowIsPickedByTheRunningMaximumOfTheCoMTravelAlongTheTrench) {
   const std::array<double, 6> w0 = {-1, 0.5, 2, 0.1, -0.2, 0.05};
   const std::array<double, 6> k = {-20, 5, 30, 1, -2, 0.5};  // per m of rho
   const TableRun r = RunTable(
       "push", SceneText(WriteTable("linear", w0, k),
                         "[{translate: [1, 0, 0], speed: 0.05, distance: 0.05}, {hold: 0.3}]"));
-  ASSERT_EQ(r.result.exit_status, 0);
+  ASSERT_EQ(r.exit_status, 0);
   int w = 0;
   const std::vector<double> rho = ReadRows(r.output, "/scoop/rho", &w);
-  const std::vector<double> com = ReadRows(r.output, "/scoop/com", &w);
+  const std::vector<double> com = ComRows(r);
   const std::vector<double> force = ReadRows(r.output, "/scoop/force_scoop", &w);
   const std::vector<double> torque = ReadRows(r.output, "/scoop/torque_scoop", &w);
   ASSERT_GT(rho.size(), 100u);
+  ASSERT_EQ(com.size(), 3 * rho.size());
   // First contact at the first step (buried); the first row is that step.
   double best = 0;
   for (size_t i = 0; i < rho.size(); ++i) {
-    best = std::max(best, com[3 * i] - com[0]);  // heading 0: the trench is world +x
-    // The rows sample the steps: rho (the maximum over every step) is at least the rows' maximum,
-    // and above it by no more than the CoM's jitter between two rows.
-    EXPECT_GE(rho[i], best - 1e-12) << "row " << i;
-    EXPECT_LE(rho[i], best + 1e-6) << "row " << i;
+    const double along = com[3 * i] - com[0];  // heading 0: the trench is world +x
+    best = std::max(best, along);
+    EXPECT_NEAR(rho[i], along, 1e-12) << "row " << i;
+    // The rows sample the steps: the table's rho (the maximum over every step) is at least the
+    // rows' maximum, and above it by no more than the CoM's jitter between two rows (1 um).
     for (int q = 0; q < 3; ++q) {
-      EXPECT_NEAR(force[3 * i + q], w0[q] + k[q] * rho[i], 1e-9 * (1 + std::abs(w0[q])));
-      EXPECT_NEAR(torque[3 * i + q], w0[3 + q] + k[3 + q] * rho[i], 1e-9);
+      EXPECT_NEAR(force[3 * i + q], w0[q] + k[q] * best,
+                  std::abs(k[q]) * 1e-6 + 1e-9 * (1 + std::abs(w0[q])))
+          << "row " << i;
+      EXPECT_NEAR(torque[3 * i + q], w0[3 + q] + k[3 + q] * best, std::abs(k[3 + q]) * 1e-6 + 1e-9)
+          << "row " << i;
     }
   }
   EXPECT_NEAR(rho.back(), 0.05, 2e-3);
+  // The coupled dig's layout: the same /scoop/ datasets, no particle in contact.
+  const std::vector<double> contacts = ReadRows(r.output, "/scoop/contacts", &w);
+  ASSERT_EQ(contacts.size(), rho.size());
+  for (double c : contacts) EXPECT_EQ(c, 0.0);
+  for (const char* name : {"/scoop/force_body", "/scoop/torque_world"}) {
+    EXPECT_EQ(ReadRows(r.output, name, &w).size(), 3 * rho.size()) << name;
+    EXPECT_EQ(w, 3) << name;
+  }
+  EXPECT_EQ(ReadRows(r.output, "/scoop/rho_path", &w).size(), rho.size());
+  const hid_t f = H5Fopen(r.output.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  EXPECT_EQ(H5Lexists(f, "/scoop/com", H5P_DEFAULT), 0);
+  H5Fclose(f);
 }
 
 TEST(TableArm, AWrenchPastAJointsCapacityRaisesJointTorqueLimitOnThatJoint) {
@@ -323,7 +364,7 @@ TEST(TableArm, AWrenchPastAJointsCapacityRaisesJointTorqueLimitOnThatJoint) {
   }
   ASSERT_GE(expected_joint, 0) << "no wrench axis loads one joint alone";
   const TableRun r = RunTable("overload", HoldScene(WriteTable("overload", w)));
-  ASSERT_EQ(r.result.exit_status, 0);
+  ASSERT_EQ(r.exit_status, 0);
   // /arm/fault_events: one record per event; its flag and joint fields, read by name.
   struct Event {
     uint64_t flag;
@@ -395,7 +436,7 @@ TEST(TableArm, RhoPastTheTablesDataHoldsTheLastValue) {
   const TableRun r = RunTable(
       "past", SceneText(WriteTable("short", w0, k, 8),
                         "[{translate: [1, 0, 0], speed: 0.05, distance: 0.05}, {hold: 0.1}]"));
-  ASSERT_EQ(r.result.exit_status, 0);
+  ASSERT_EQ(r.exit_status, 0);
   int w = 0;
   const std::vector<double> rho = ReadRows(r.output, "/scoop/rho", &w);
   const std::vector<double> force = ReadRows(r.output, "/scoop/force_scoop", &w);
@@ -425,14 +466,15 @@ TEST(TableArm, SnapshotsHoldTheScoopAndTheArmAndStopAfterEndsTheRun) {
   options.output = (TempDir() / "snap.h5").string();
   options.quiet = true;
   options.stop_after = 0.2;
-  const sim::TableArmResult result = sim::RunTableArm(scene, options);
-  ASSERT_EQ(result.exit_status, 0);
+  ASSERT_EQ(sim::RunScene(scene, options), 0);
   const double h = scene.time_step;
-  EXPECT_GE(result.simulated, 0.2 - 1e-12);
-  EXPECT_LT(result.simulated, 0.2 + h);
+  const double simulated = RootAttribute(options.output, "time");
+  EXPECT_GE(simulated, 0.2 - 1e-12);
+  EXPECT_LT(simulated, 0.2 + h);
+  const int64_t steps = std::llround(simulated / h);
   const sim::SavedRun run(options.output);
   const std::vector<sim::SnapshotInfo> snapshots = run.Snapshots();
-  ASSERT_EQ(static_cast<int64_t>(snapshots.size()), 1 + result.steps / 1000);
+  ASSERT_EQ(static_cast<int64_t>(snapshots.size()), 1 + steps / 1000);
   ASSERT_GE(snapshots.size(), 2u);
   EXPECT_EQ(snapshots[0].time, 0.0);
   EXPECT_NEAR(snapshots[1].time, 1000 * h, 1e-12);

@@ -26,15 +26,20 @@ def make_run(path, fault=True, drop=None, old=False):
     """Three joints a, b, c; 1 ms rows from t = 2 s (start_time) for 1 s; j_b's demand ramps to
     twice its 10 N m limit, crossing it at 0.5 s; the flag (32) on joint 1 at 0.6 s. The fault
     datasets as scoopsim writes them (uint64 bits, /arm/fault_events a table of records, zero rows
-    without a fault), or with `old` as before issue 40 (float64, e x 5, absent without a fault)."""
+    without a fault; j_b's limit as the URDF's 40 N m in /arm/effort_limit derated by 0.25 in
+    /arm/effort_derate), or with `old` as before issue 40 (float64, e x 5, absent without a fault;
+    /arm/effort_limit the derated limit itself, no /arm/effort_derate)."""
     t = 2.0 + np.arange(1000) * 1e-3
     limit = np.tile([50.0, 10.0, 5.0], (t.size, 1))
     demanded = np.stack([np.full(t.size, 5.0), 20.0 * (t - 2.0) if fault else 0.5 * (t - 2.0),
                          np.full(t.size, 1.0)], axis=1)
     data = {"time": t, "torque_demanded": demanded,
-            "torque_applied": np.clip(demanded, -limit, limit), "effort_limit": limit,
+            "torque_applied": np.clip(demanded, -limit, limit),
+            "effort_limit": limit if old else np.tile([50.0, 40.0, 5.0], (t.size, 1)),
             "fault_latched": np.where(t >= 2.6, 32, 0).astype(np.uint64) if fault
             else np.zeros(t.size, np.uint64)}
+    if not old:
+        data["effort_derate"] = np.tile([1.0, 0.25, 1.0], (t.size, 1))
     if old:
         data["fault_latched"] = data["fault_latched"].astype(np.float64)
         if fault:
@@ -63,6 +68,9 @@ def main():
         result = run([fault, calm, "-o", png, "--labels", "fault,calm", "--title", "test"])
         assert result.returncode == 0, result.stderr
         assert "fault: JOINT_TORQUE_LIMIT on j_b at 2.600 s" in result.stdout, result.stdout
+        # The limit in force: the URDF's 40 N m x the derate 0.25 (new files), or as written (old).
+        assert "fault: JOINT_TORQUE_LIMIT on j_b at 2.600 s (|demanded| 12 N m, limit 10 N m); " \
+            "j_b's limit 10 N m" in result.stdout, result.stdout
         assert "calm: no fault" in result.stdout, result.stdout
         with open(png, "rb") as f:
             assert f.read(8) == b"\x89PNG\r\n\x1a\n"
@@ -72,6 +80,7 @@ def main():
         result = run([old, "-o", os.path.join(d, "old.png")])
         assert result.returncode == 0, result.stderr
         assert "JOINT_TORQUE_LIMIT on j_b at 2.600 s" in result.stdout, result.stdout
+        assert "j_b's limit 10 N m" in result.stdout, result.stdout
         png2 = os.path.join(d, "sub", "joint_c.png")
         result = run([fault, "-o", png2, "--joint", "j_c"])
         assert result.returncode == 0 and os.path.exists(png2), result.stderr
