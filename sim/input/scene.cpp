@@ -57,29 +57,8 @@ std::string Int(double v) {
 
 using yaml_input::LineOf;
 
-// One-line description of what a node holds, as written: "-1", "[2e-3, 1e-3]", "a map".
-std::string Describe(const YAML::Node& node) {
-  switch (node.Type()) {
-    case YAML::NodeType::Scalar:
-      return node.Scalar().empty() ? "an empty string" : node.Scalar();
-    case YAML::NodeType::Sequence: {
-      std::string out = "[";
-      for (size_t i = 0; i < node.size(); ++i) {
-        if (i > 0) out += ", ";
-        const YAML::Node item = node[i];
-        out += item.IsScalar() ? item.Scalar() : (item.IsMap() ? "{...}" : Describe(item));
-      }
-      return out + "]";
-    }
-    case YAML::NodeType::Map:
-      return "a map";
-    case YAML::NodeType::Null:
-      return "nothing";
-    case YAML::NodeType::Undefined:
-    default:
-      return "nothing (key missing)";
-  }
-}
+using yaml_input::Describe;
+using yaml_input::ResolveAgainst;
 
 std::string Join(const std::vector<std::string>& items, const char* sep = ", ") {
   std::string out;
@@ -307,14 +286,6 @@ bool NonNegative(double v) { return v >= 0; }
 double MeanSphereVolume(double a, double b) {
   const double mean_r3 = b > a ? (b * b * b * b - a * a * a * a) / (4.0 * (b - a)) : a * a * a;
   return 4.0 / 3.0 * kPi * mean_r3;
-}
-
-// Path of a file named in `owner_file`, relative to its folder unless absolute. Not normalised,
-// so messages show the user's own spelling.
-std::string ResolveAgainst(const std::string& owner_file, const std::string& name) {
-  const std::filesystem::path p(name);
-  if (p.is_absolute()) return name;
-  return (std::filesystem::path(owner_file).parent_path() / p).string();
 }
 
 // The keys rolling_model and damping of a map, where present, into `out`.
@@ -1159,6 +1130,21 @@ int SceneLine(const Scene& scene, const std::string& key) {
   return line;
 }
 
+void RefuseArmScene(const Scene& scene, const std::string& command) {
+  if (!scene.arm.enabled) return;
+  // At the key's own line (SceneLine gives its value's: the line under it for a block map). The
+  // text was read as this scene: it parses.
+  int line = 1;
+  const YAML::Node root = ParseScene(scene.path, scene.yaml_text);
+  for (auto it = root.begin(); it != root.end(); ++it)
+    if (it->first.IsScalar() && it->first.Scalar() == "arm") line = LineOf(it->first);
+  const InputError error(scene.path, line, "arm",
+                         "a scene without an arm (" + command +
+                             " digs kinematically: the scoop follows the dig's path exactly)",
+                         "an arm", "run a scene with an arm with `scoopsim run`");
+  throw NamingSet(error, yaml_input::SetsOf(scene.yaml_text));
+}
+
 std::vector<std::string> BuiltinClumpNames() {
   std::vector<std::string> names;
   for (const dem::ClumpTemplate& t : dem::TetrahedronTemplates()) names.push_back(t.name);
@@ -1375,8 +1361,8 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
          "none");
   }
 
-  // The bed fits the box. The bed is poured in rounds (sim/loop/bed.h), each a loose lattice fill of
-  // pitch a = max(cbrt(mean sphere volume / fill_fraction), 2 rmax) above the bed so far
+  // The bed fits the box. The bed is poured in rounds (sim/loop/bed.h), each a loose lattice fill
+  // of pitch a = max(cbrt(mean sphere volume / fill_fraction), 2 rmax) above the bed so far
   // (dem/insertion.h), so the box must hold one lattice cell in every direction and the settled
   // bed, at a solid fraction of about 0.59, must lie below the box's top.
   // Clumps are poured as their bounding spheres at a solid fraction of clumps of fill_fraction
@@ -1542,6 +1528,38 @@ StoredScene ParseStoredScene(const std::string& yaml_text, const std::string& na
     stored.has_gravity = true;
   }
   if (root["render"]) stored.render = ParseRender(name, root["render"]);
+  return stored;
+}
+
+StoredDig ParseStoredDig(const std::string& yaml_text, const std::string& name) {
+  const YAML::Node root = ParseScene(name, yaml_text);
+  if (!root.IsMap() || !root["bed"] || !root["dig"])
+    Fail(name, 1, "(top level)", "a scene with a bed and a dig", Describe(root));
+  // Only the keys read here are checked; the others may come from another version.
+  const auto only = [&](const char* map, std::initializer_list<const char*> keys) {
+    YAML::Node subset(YAML::NodeType::Map);
+    for (const char* key : keys)
+      if (root[map].IsMap() && root[map][key]) subset[key] = root[map][key];
+    return MapReader(name, root[map].IsMap() ? subset : root[map], map, keys);
+  };
+  StoredDig stored;
+  const MapReader bed = only("bed", {"material", "radius", "clump"});
+  stored.material = bed.String("material", "a material name");
+  if (bed.Has("clump")) {
+    stored.clump = bed.String("clump", "a clump template name");
+  } else {
+    const std::string expected = "a number > 0 or a range [rmin, rmax] (m)";
+    const YAML::Node r = bed.Need("radius", expected);
+    if (r.IsSequence() && r.size() == 2) {
+      stored.radius_min = bed.CheckNumber(r[0], "bed.radius", expected, Positive, &r);
+      stored.radius_max = bed.CheckNumber(r[1], "bed.radius", expected, Positive, &r);
+    } else {
+      stored.radius_min = stored.radius_max = bed.CheckNumber(r, "bed.radius", expected, Positive);
+    }
+  }
+  const MapReader dig = only("dig", {"bite_depth"});
+  stored.bite_depth =
+      dig.Number("bite_depth", DigSpec{}.bite_depth, "a number >= 0 (m)", NonNegative);
   return stored;
 }
 

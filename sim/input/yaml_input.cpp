@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <vector>
 
@@ -13,6 +14,37 @@ namespace sim::yaml_input {
 int LineOf(const YAML::Node& node) {
   const int line = node.Mark().line;
   return line >= 0 ? line + 1 : 1;
+}
+
+std::string Describe(const YAML::Node& node) {
+  // A key looked up in a const map where it is not: an invalid node, whose Type() throws.
+  if (!node.IsDefined()) return "nothing (key missing)";
+  switch (node.Type()) {
+    case YAML::NodeType::Scalar:
+      return node.Scalar().empty() ? "an empty string" : node.Scalar();
+    case YAML::NodeType::Sequence: {
+      std::string out = "[";
+      for (size_t i = 0; i < node.size(); ++i) {
+        if (i > 0) out += ", ";
+        const YAML::Node item = node[i];
+        out += item.IsScalar() ? item.Scalar() : (item.IsMap() ? "{...}" : Describe(item));
+      }
+      return out + "]";
+    }
+    case YAML::NodeType::Map:
+      return "a map";
+    case YAML::NodeType::Null:
+      return "nothing";
+    case YAML::NodeType::Undefined:
+    default:
+      return "nothing (key missing)";
+  }
+}
+
+std::string ResolveAgainst(const std::string& owner_file, const std::string& name) {
+  const std::filesystem::path p(name);
+  if (p.is_absolute()) return name;
+  return (std::filesystem::path(owner_file).parent_path() / p).string();
 }
 
 YAML::Node ParseDocument(const std::string& file, const std::string& text) {
@@ -165,6 +197,7 @@ void ApplySets(YAML::Node* root, const std::vector<std::string>& sets) {
         if (index >= node.size()) {
           BadSet(set, "an index below " + std::to_string(node.size()) + " at '" + key + "'");
         }
+        if (last && value.IsNull()) BadSet(set, "a value (a list entry cannot be removed)");
         if (last) {
           node[index] = value;
         } else {
@@ -176,7 +209,9 @@ void ApplySets(YAML::Node* root, const std::vector<std::string>& sets) {
       // (A lookup on a const node: a non-const one would insert the key, undefined.)
       const YAML::Node found = static_cast<const YAML::Node&>(node)[key];
       const bool present = found.IsDefined();
-      if (last) {
+      if (last && value.IsNull()) {
+        node.remove(key);
+      } else if (last) {
         if (present) {
           node[key] = value;
         } else {

@@ -13,6 +13,14 @@ namespace sim::yaml_input {
 // 1-based line of a node, or 1 for a node without a mark (an empty document).
 int LineOf(const YAML::Node& node);
 
+// One-line description of what a node holds, as written, for "got ..." in messages: "-1",
+// "[2e-3, 1e-3]", "a map", "nothing".
+std::string Describe(const YAML::Node& node);
+
+// Path of a file named in `owner_file`, relative to its folder unless absolute. Not normalised,
+// so messages show the user's own spelling.
+std::string ResolveAgainst(const std::string& owner_file, const std::string& name);
+
 // The one document of `text` (a null node for an empty text). A syntax error, or a second document
 // that holds anything ("---" then more keys, which a plain YAML::Load would drop silently), is an
 // InputError naming `file` and the line.
@@ -52,7 +60,8 @@ std::string TextWithSets(const std::string& text, const std::vector<std::string>
 std::vector<std::string> SetsOf(const std::string& text);
 // Writes each override into `root` (a map, or null for an empty document): KEY is a dotted path of
 // map keys (or list indices), created when missing; VALUE is parsed as YAML. A malformed KEY=VALUE
-// is an InputError naming --set.
+// is an InputError naming --set. A null VALUE (~) removes a map's key (a list entry cannot be
+// removed).
 void ApplySets(YAML::Node* root, const std::vector<std::string>& sets);
 // The override a line from ApplySets belongs to ("" for a line of the file itself).
 std::string SetAt(int line, const std::vector<std::string>& sets);

@@ -1,5 +1,5 @@
-// Sweeps (sim/studies/sweep.cpp): the sweep file (cases from a grid and a list, errors at load with the
-// line and key), status records, and end to end on scenes/sweeps/tiny.yaml (four cases, two
+// Sweeps (sim/studies/sweep.cpp): the sweep file (cases from a grid and a list, errors at load with
+// the line and key), status records, and end to end on scenes/sweeps/tiny.yaml (four cases, two
 // passes each): a plain run, a two-rank `mpirun` run, `--case I` and runs SIGKILLed mid-case
 // (in a pass without checkpoints, in a pass with them, in the pour) then resumed all give the
 // same table and case rows, bit for bit.
@@ -99,6 +99,38 @@ cases:
       sim::LoadSceneText(sweep.cases[3].scene.path, sweep.cases[3].scene.yaml_text);
   EXPECT_EQ(again.bed.material, "ice");
   EXPECT_EQ(again.dig.bite_depth, 0.01);
+  // ... made as the command line's --set makes a scene: the base file's text, whole, then the
+  // case's settings as `# scoopsim --set KEY=VALUE` lines ("[i]" as ".i").
+  const std::string base = ReadText(kSourceDir + std::string("/scenes/sweeps/tiny_scene.yaml"));
+  EXPECT_EQ(sweep.cases[3].scene.yaml_text.compare(0, base.size(), base), 0);
+  EXPECT_EQ(sim::LoadScene(sweep.cases[3].scene.path, {"bed.material=ice", "dig.bite_depth=0.01"})
+                .dig.bite_depth,
+            0.01);
+  const std::string text = sweep.cases[3].scene.yaml_text;
+  EXPECT_NE(
+      text.find("\n# scoopsim --set bed.material=ice\n# scoopsim --set dig.bite_depth=0.01\n"),
+      std::string::npos)
+      << text;
+}
+
+TEST(SweepFileTest, ListIndexAndRemovalAreOverrides) {
+  // tiny_scene.yaml: dig.trajectory.start [0.13, 0.08], dig.interval 2.0e-3.
+  const sim::Sweep sweep = sim::LoadSweep(WriteSweep("index.yaml", R"(cases:
+  - name: far
+    set:
+      dig.trajectory.start[1]: 0.09
+      dig.interval: ~
+)"));
+  ASSERT_EQ(sweep.cases.size(), 1u);
+  const sim::Scene& scene = sweep.cases[0].scene;
+  const sim::Scene base = sim::LoadScene(scene.path);
+  EXPECT_EQ(base.dig.interval, 2.0e-3);
+  EXPECT_EQ(scene.dig.interval, sim::DigSpec{}.interval);  // the key removed: its default
+  EXPECT_NE(scene.yaml_text.find("\n# scoopsim --set dig.trajectory.start.1=0.09\n"),
+            std::string::npos)
+      << scene.yaml_text;
+  EXPECT_EQ(base.dig.trajectory.pivot_start.y, 0.08);
+  EXPECT_EQ(scene.dig.trajectory.pivot_start.y, 0.09);  // dig.trajectory.start: [x, y]
 }
 
 TEST(SweepFileTest, UnknownSceneKeyPathFailsAtItsLine) {
