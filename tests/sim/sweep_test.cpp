@@ -437,11 +437,15 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
   const std::string text = ReadText(log);
   EXPECT_NE(text.find("[3/4] ice_b10 started"), std::string::npos) << text;
   EXPECT_NE(text.find("of 4 finished, ETA"), std::string::npos) << text;
-  // A case's file is a run's output with two passes, its scene the edited base scene.
+  // A case's file is a run's output with two passes, its scene the base scene with the case's
+  // settings as --set lines, which whatever reads the text again applies.
   const sim::SavedRun run((plain / "cases" / "ice_b5.h5").string());
   const std::string scene = run.SceneYaml();
-  EXPECT_NE(scene.find("material: ice"), std::string::npos) << scene;
-  EXPECT_NE(scene.find("bite_depth: 0.005"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("\n# scoopsim --set bed.material=ice\n"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("\n# scoopsim --set dig.bite_depth=0.005\n"), std::string::npos) << scene;
+  const sim::StoredDig stored = sim::ParseStoredDig(scene, "ice_b5.h5");
+  EXPECT_EQ(stored.material, "ice");
+  EXPECT_EQ(stored.bite_depth, 0.005);
   const sim::ScoopSeries scoop = run.Scoop();
   ASSERT_FALSE(scoop.empty());
   EXPECT_EQ(scoop.pass.front(), 1);
