@@ -251,11 +251,11 @@ class MapReader {
     v = CheckNumber(value, key, expected, ok, whole);
     if (yaml_input::LooksLikeRadians(v)) {
       const std::string unit = rate ? "deg/s" : "deg";
-      yaml_input::Warn(file_ + ":" + std::to_string(LineOf(value)) + ": " + key + ": " +
-                       value.Scalar() + " is taken as " + unit +
-                       "; if radians were meant, write '" + value.Scalar() + " " +
-                       (rate ? "rad/s" : "rad") + "' (or '" + value.Scalar() + " " + unit +
-                       "' to keep degrees)");
+      yaml_input::Warn(file_, LineOf(value),
+                       key + ": " + value.Scalar() + " is taken as " + unit +
+                           "; if radians were meant, write '" + value.Scalar() + " " +
+                           (rate ? "rad/s" : "rad") + "' (or '" + value.Scalar() + " " + unit +
+                           "' to keep degrees)");
     }
     return v;
   }
@@ -1203,10 +1203,13 @@ InputError NamingSet(const InputError& error, const std::vector<std::string>& se
 
 Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
   yaml_input::TakeWarnings();  // none left from a load that failed
+  const std::vector<std::string> sets = yaml_input::SetsOf(yaml_text);
   try {
-    return ReadScene(path, yaml_text);
+    Scene scene = ReadScene(path, yaml_text);
+    for (std::string& w : scene.warnings) w = yaml_input::WarningNamingSet(w, path, sets);
+    return scene;
   } catch (const InputError& e) {
-    throw NamingSet(e, yaml_input::SetsOf(yaml_text));
+    throw NamingSet(e, sets);
   }
 }
 
@@ -1462,15 +1465,15 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
 
   // Legal but almost surely wrong: warnings, not refusals.
   if (dem::Dot(scene.gravity, scene.gravity) == 0) {
-    scene.warnings.push_back(path + ":" + std::to_string(LineOf(root["gravity"])) +
-                             ": gravity: [0, 0, 0] m/s^2: nothing will settle and the bed will "
-                             "not resist the scoop (the paper's is [0, 0, -1.3])");
+    yaml_input::Warn(path, LineOf(root["gravity"]),
+                     "gravity: [0, 0, 0] m/s^2: nothing will settle and the bed will "
+                     "not resist the scoop (the paper's is [0, 0, -1.3])");
   }
   if (scene.dig.surface_given && scene.dig.surface > scene.box_max.z) {
-    scene.warnings.push_back(path + ":" + std::to_string(LineOf(root["dig"]["surface"])) +
-                             ": dig.surface: " + Num(scene.dig.surface) +
-                             " m is above the box's open top (box.max z = " + Num(scene.box_max.z) +
-                             " m): no bed stands there, the scoop will dig air");
+    yaml_input::Warn(path, LineOf(root["dig"]["surface"]),
+                     "dig.surface: " + Num(scene.dig.surface) +
+                         " m is above the box's open top (box.max z = " + Num(scene.box_max.z) +
+                         " m): no bed stands there, the scoop will dig air");
   }
   // The arm's step: below the explicit D term's bound; on a table, at most the lander's control
   // step; coupled, below the wrench lag's bound.
@@ -1497,10 +1500,9 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
            std::to_string(scene.arm.substeps), why);
     }
   }
-  // The reading's warnings (a bare angle that looks like radians) go before the checks' own; the
+  // The warnings, in the order found (a bare angle that looks like radians, then the checks'); the
   // CLI prints them (PrintWarnings in tools/main.cpp), once per command, not per load.
-  std::vector<std::string> read_warnings = yaml_input::TakeWarnings();
-  scene.warnings.insert(scene.warnings.begin(), read_warnings.begin(), read_warnings.end());
+  scene.warnings = yaml_input::TakeWarnings();
   return scene;
 }
 

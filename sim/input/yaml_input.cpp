@@ -117,7 +117,9 @@ namespace {
 thread_local std::vector<std::string> warnings;
 }  // namespace
 
-void Warn(const std::string& line) { warnings.push_back(line); }
+void Warn(const std::string& file, int line, const std::string& text) {
+  warnings.push_back(file + ":" + std::to_string(line) + ": " + text);
+}
 
 std::vector<std::string> TakeWarnings() {
   std::vector<std::string> out;
@@ -234,6 +236,16 @@ void ApplySets(YAML::Node* root, const std::vector<std::string>& sets) {
 std::string SetAt(int line, const std::vector<std::string>& sets) {
   const int i = line - kSetLine;
   return i >= 0 && i < static_cast<int>(sets.size()) ? sets[i] : std::string();
+}
+
+std::string WarningNamingSet(const std::string& warning, const std::string& file,
+                             const std::vector<std::string>& sets) {
+  for (size_t i = 0; i < sets.size(); ++i) {
+    const std::string at = file + ":" + std::to_string(kSetLine + static_cast<int>(i)) + ": ";
+    if (warning.compare(0, at.size(), at) == 0)
+      return "--set " + sets[i] + ": " + warning.substr(at.size());
+  }
+  return warning;
 }
 
 }  // namespace sim::yaml_input

@@ -39,9 +39,10 @@ bool ParseAngleWithUnit(const std::string& text, bool rate, double* degrees);
 // integer and |v| <= 2 pi (a radian value from ROS is rarely whole, a degree value in a scene
 // nearly always is; writing the unit silences it).
 bool LooksLikeRadians(double v);
-// Warnings of the input being read on this thread, one line each ("FILE:LINE: KEY: ..."):
-// Warn adds one, TakeWarnings returns them and starts over.
-void Warn(const std::string& line);
+// Warnings of the input being read on this thread, one line each ("FILE:LINE: KEY: ..."): the one
+// route of a scene's warnings (sim::Scene::warnings takes them at the end of its load). Warn adds
+// one about `line` of `file`, TakeWarnings returns them and starts over.
+void Warn(const std::string& file, int line, const std::string& text);
 std::vector<std::string> TakeWarnings();
 
 // Scene keys set from the command line (`--set KEY=VALUE`, repeatable). They travel with the
@@ -65,5 +66,9 @@ std::vector<std::string> SetsOf(const std::string& text);
 void ApplySets(YAML::Node* root, const std::vector<std::string>& sets);
 // The override a line from ApplySets belongs to ("" for a line of the file itself).
 std::string SetAt(int line, const std::vector<std::string>& sets);
+// A warning of Warn about `file` reworded to name the override it is about ("--set KEY=VALUE:
+// KEY: ...") when its line is one of `sets`'; else `warning`.
+std::string WarningNamingSet(const std::string& warning, const std::string& file,
+                             const std::vector<std::string>& sets);
 
 }  // namespace sim::yaml_input

@@ -150,6 +150,16 @@ TEST(SweepFileTest, UnknownSceneKeyPathFailsAtItsLine) {
   EXPECT_EQ(value.key(), "dig.bite_depth");
 }
 
+// A sweep digs kinematically: a case that gives the scene an arm is refused at its setting's
+// line, key `arm` (a base scene with one, at its own line: hand_cases_test.cpp).
+TEST(SweepFileTest, CaseWithAnArmIsRefused) {
+  const sim::InputError e = LoadError(
+      "cases:\n  - name: witharm\n    set: {arm: {urdf: ../../assets/lander_arm.urdf}}\n");
+  EXPECT_EQ(e.line(), 4) << e.what();
+  EXPECT_EQ(e.key(), "arm") << e.what();
+  EXPECT_NE(e.expected().find("a sweep digs kinematically"), std::string::npos) << e.what();
+}
+
 TEST(SweepFileTest, EmptyGridFails) {
   for (const char* body :
        {"grid: {}\n", "grid:\n  bed.material: []\n", "grid:\n  dig.bite_depth: {}\n",
