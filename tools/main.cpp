@@ -14,9 +14,11 @@
 //                                            the particle-size study (eq. 5-7; CSV, table, PNGs)
 //   scoopsim sweep SWEEP.yaml -o DIR; scoopsim table build|query|export-csv (tools/sweep_cli.h)
 //   scoopsim arm info URDF [--gravity G]     the parsed arm and its gravity torques
-// Exit status: sim/input/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4 bed
-// not settled, 130 stopped by a signal).
-// Bad input is reported as one line on stderr: "scoopsim: FILE:LINE: KEY: expected ..., got ...".
+// Each subcommand is one function (its options, then how it runs), registered in kCommands; Main
+// sets them all up, parses, and runs the one given.
+// Exit status: sim/input/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4
+// bed not settled, 130 stopped by a signal). Bad input is reported as one line on stderr:
+// "scoopsim: FILE:LINE: KEY: expected ..., got ...".
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -27,6 +29,9 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <functional>
+#include <iterator>
+#include <map>
 #include <memory>
 #include <string>
 #include <thread>
@@ -38,11 +43,11 @@
 #include "render/frames.h"
 #include "render/saved_run.h"
 #include "sim/files/checkpoint.h"
-#include "sim/studies/commands.h"
-#include "sim/input/exit_status.h"
-#include "sim/loop/preflight.h"
 #include "sim/files/saved_run.h"
+#include "sim/input/exit_status.h"
 #include "sim/input/scene.h"
+#include "sim/loop/preflight.h"
+#include "sim/studies/commands.h"
 #include "tools/arm_info.h"
 #include "tools/cli_checks.h"
 #include "tools/sweep_cli.h"
@@ -274,6 +279,495 @@ int AllCores() {
   return n > 0 ? static_cast<int>(n) : 1;
 }
 
+// ---------------------------------------------------------------------------------------------
+// The subcommands: one function each, which adds the command and its options under `parent` and
+// returns how to run it; Main sets them all up from kCommands and runs the one given.
+
+// A subcommand set up on the command line.
+struct Command {
+  std::function<bool()> given;  // it is the command the command line named
+  std::function<int()> run;     // runs it (after parsing); its exit status
+  // Its --set overrides (none: null): an InputError found after the scene's load about a key
+  // they set names the --set, as LoadScene's own errors do.
+  std::shared_ptr<const std::vector<std::string>> sets;
+};
+using Setup = Command (*)(CLI::App* parent);
+
+std::function<bool()> Given(const CLI::App* command) {
+  return [command] { return static_cast<bool>(*command); };
+}
+// The --set overrides of a command's arguments, kept alive with them.
+template <typename Args>
+std::shared_ptr<const std::vector<std::string>> SetsOf(const std::shared_ptr<Args>& args) {
+  return std::shared_ptr<const std::vector<std::string>>(args, &args->sets);
+}
+
+Command Bed(CLI::App* parent) {
+  CLI::App* command =
+      parent->add_subcommand("bed", "Fill the scene's box, settle the bed and save it");
+  auto args = std::make_shared<SceneCommand>();
+  args->AddTo(command, "out/bed.h5", true);
+  return {Given(command),
+          [args] {
+            sim::Scene scene = sim::LoadScene(args->scene, args->sets);
+            sim::Preflight(&scene, sim::Work::kBed);
+            PrintWarnings(scene);
+            return sim::MakeBed(scene, args->Options(scene));
+          },
+          SetsOf(args)};
+}
+
+struct RunArgs : SceneCommand {
+  double stop_after = 0;
+  double checkpoint_every = 0;
+  std::string resume;
+  FramesArgs frames;
+};
+
+int RunCommand(const RunArgs& args) {
+  if (args.scene.empty() && args.resume.empty())
+    throw sim::InputError("run: SCENE: expected a scene file (or --resume OUT.h5)");
+  if (args.scene.empty() && !args.sets.empty())
+    throw sim::InputError(
+        "run: --set: expected a SCENE to set keys of (a run resumed without "
+        "one goes on with its checkpoint's scene, the --set it had included)");
+  if (!args.resume.empty() && args.output_option->count() > 0 && args.output != args.resume)
+    throw sim::InputError("run: -o " + args.output + " and --resume " + args.resume +
+                          ": a resumed run writes the output it resumes; give one of them");
+  // Resumed without SCENE: the scene text and path its checkpoint holds.
+  sim::Scene scene = !args.scene.empty() ? sim::LoadScene(args.scene, args.sets) : [&] {
+    const sim::Checkpoint c = sim::ReadCheckpoint(sim::CheckpointPath(args.resume));
+    return sim::LoadSceneText(c.scene_path, c.scene_yaml);
+  }();
+  sim::Preflight(&scene, sim::Work::kRun);
+  PrintWarnings(scene);
+  sim::RunOptions options = args.Options(scene);
+  options.stop_after = args.stop_after;
+  options.checkpoint_every = args.checkpoint_every;
+  if (!args.resume.empty()) {
+    options.resume = true;
+    options.output = args.resume;
+  }
+  const FramesArgs& run_frames = args.frames;
+  std::unique_ptr<render::FrameSequence> frames;
+  if (!run_frames.dir.empty()) {
+    // The frames' folder would be made where the output goes ("Is a directory").
+    std::error_code ec;
+    const std::filesystem::path frames_at = std::filesystem::weakly_canonical(run_frames.dir, ec);
+    if (!ec && frames_at == std::filesystem::weakly_canonical(options.output, ec)) {
+      throw sim::InputError("--frames " + run_frames.dir +
+                            ": expected a folder other than the output file (-o " + options.output +
+                            ")");
+    }
+    // Checked before the renderer is made (an OpenGL context): at most a frame a step, a
+    // spacing below the time step is a typo (1e-300 for 1e-3).
+    options.frame_every = run_frames.every > 0 ? run_frames.every : scene.render.every;
+    if (options.frame_every > 0 && options.frame_every < scene.time_step) {
+      char text[96];
+      std::snprintf(text, sizeof text,
+                    ": expected at least the time step (%.6g s) between frames, got %.6g",
+                    scene.time_step, options.frame_every);
+      throw sim::InputError(
+          (run_frames.every > 0 ? std::string("--every") : scene.path + ": render.every") + text);
+    }
+    // Rendering happens inside the run loop's frame callback, between steps: the DEM's
+    // OpenMP threads are idle then, and llvmpipe gets as many threads as the DEM had.
+    render::FrameOptions frame_options =
+        run_frames.Options(scene.render, options.threads > 0 ? options.threads : AllCores());
+    if (!frame_options.range_given) {
+      render::SceneColorRange(scene, frame_options.settings.color_by,
+                              &frame_options.settings.range_min, &frame_options.settings.range_max);
+    }
+    frames = std::make_unique<render::FrameSequence>(frame_options);
+    options.on_frame = [&frames](const sim::WorldView& view) { frames->Add(view); };
+  }
+  const int status = sim::RunScene(scene, options);
+  if (frames) {
+    std::fprintf(stderr, "scoopsim: %d frames in %s (%.0f ms draw + %.0f ms PNG a frame)\n",
+                 frames->count(), run_frames.dir.c_str(),
+                 1e3 * frames->draw_seconds() / std::max(frames->count(), 1),
+                 1e3 * frames->png_seconds() / std::max(frames->count(), 1));
+    run_frames.MaybeVideo();
+  }
+  return status;
+}
+
+Command Run(CLI::App* parent) {
+  CLI::App* command = parent->add_subcommand(
+      "run", "Run a scene for its duration (loads bed.file, or makes the bed first)");
+  auto args = std::make_shared<RunArgs>();
+  args->AddTo(command, "out/run.h5", true);
+  command
+      ->add_option("--stop-after", args->stop_after,
+                   "Stop after this many simulated seconds, the output closed as on SIGINT "
+                   "(default: at the scene's end)")
+      ->check(tools::FinitePositive("s"));
+  command
+      ->add_option("--checkpoint-every", args->checkpoint_every,
+                   "Keep the run's whole state in OUT.restart.h5 every this many seconds of wall "
+                   "time (and when stopped by a signal); removed when the run ends")
+      ->check(tools::FinitePositive("s"));
+  command
+      ->add_option("--resume", args->resume,
+                   "Go on from OUT.restart.h5 of this output (SCENE, if given, must be the one it "
+                   "was made from); the output ends as the uninterrupted run's")
+      ->option_text("OUT.h5");
+  args->scene_option->required(false);
+  args->frames.AddTo(command, false, true);
+  return {Given(command), [args] { return RunCommand(*args); }, SetsOf(args)};
+}
+
+Command Check(CLI::App* parent) {
+  CLI::App* command = parent->add_subcommand(
+      "check",
+      "Check a scene as `run` would before any work (the scene, its mesh and bed file, the time "
+      "step, the steps and memory the run needs, the dig's path) and print the forecast");
+  struct Args {
+    std::string scene;
+    std::vector<std::string> sets;
+  };
+  auto args = std::make_shared<Args>();
+  command->add_option("SCENE", args->scene, "Scene file (YAML)")->required();
+  AddSetOption(command, &args->sets);
+  return {Given(command),
+          [args] {
+            sim::Scene scene = sim::LoadScene(args->scene, args->sets);
+            const sim::RunForecast f = sim::Preflight(&scene, sim::Work::kRun);
+            PrintWarnings(scene);
+            std::printf(
+                "%s: ok: %lld particles, time step %.4g s, %.4g s simulated in about %.3g "
+                "steps, about %.3g MB of memory\n",
+                args->scene.c_str(), static_cast<long long>(f.particles), f.time_step, f.simulated,
+                f.steps, f.bytes / 1e6);
+            return 0;
+          },
+          SetsOf(args)};
+}
+
+Command Render(CLI::App* parent) {
+  struct Args {
+    FramesArgs frames;
+    std::string input;
+    bool quiet = false;
+    int threads = 0;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* command = parent->add_subcommand(
+      "render",
+      "Render the particle snapshots of a saved run (scoopsim run -o OUT.h5) as PNG frames");
+  command->add_option("OUT.h5", args->input, "A run's HDF5 file")->required();
+  args->frames.AddTo(command, true, false);
+  command
+      ->add_option("--threads", args->threads, "Rasteriser threads (LP_NUM_THREADS); 0 = all cores")
+      ->check(CLI::Range(0, kMaxThreads));
+  command->add_flag("-q,--quiet", args->quiet, "No progress output");
+  return {Given(command),
+          [args] {
+            // Camera, colouring and size from the run's own scene (its `render:` block), then the
+            // command line.
+            const sim::RenderSpec spec = sim::SavedRun(args->input).Scene().render;
+            render::FrameSequence frames(
+                args->frames.Options(spec, args->threads > 0 ? args->threads : AllCores()));
+            const int count = render::RenderSavedRun(args->input, &frames, args->quiet);
+            std::fprintf(stderr, "scoopsim: %d frames in %s\n", count, args->frames.dir.c_str());
+            args->frames.MaybeVideo();
+            return 0;
+          },
+          nullptr};
+}
+
+// A study: a subcommand with a scene, an output, --threads and --quiet.
+CLI::App* AddStudy(CLI::App* study, SceneCommand* args, const char* name, const char* help,
+                   const char* output) {
+  CLI::App* command = study->add_subcommand(name, help);
+  args->AddTo(command, output, false);
+  return command;
+}
+
+Command Shape(CLI::App* study) {
+  struct Args : SceneCommand {
+    std::vector<std::string> templates;
+    std::string beds;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* command = AddStudy(
+      study, args.get(), "shape",
+      "Shape-complexity study (paper Table 3, Fig. 8): the scene's dig on a bed of each clump "
+      "template; wrench and wall time per template in one HDF5 file",
+      "out/shape_study.h5");
+  command
+      ->add_option("--templates", args->templates,
+                   "Clump templates, comma separated (default: tetra1,tetra4,tetra8,tetra12)")
+      ->delimiter(',');
+  command->add_option("--beds", args->beds,
+                      "Folder of the beds: DIR/<template>.h5 is loaded if present and made from "
+                      "the same scene text, else made and saved there");
+  return {Given(command),
+          [args] {
+            const sim::Scene scene = sim::LoadScene(args->scene, args->sets);
+            auto options = args->OptionsAs<sim::ShapeStudyOptions>(scene);
+            options.templates = args->templates;
+            options.bed_dir = args->beds;
+            return sim::RunShapeStudy(scene, options);
+          },
+          SetsOf(args)};
+}
+
+struct BalovnevArgs : SceneCommand {
+  double phi = 44, delta = 28, rake = 10;  // [deg]
+  bool buried = false, no_plot = false;
+  std::string model = "both";
+};
+
+int BalovnevCommand(const BalovnevArgs& args) {
+  const sim::Scene scene = sim::LoadScene(args.scene, args.sets);
+  auto options = args.OptionsAs<sim::BalovnevStudyOptions>(scene);
+  options.plot = !args.no_plot;
+  // The angles' domain, in the flags' own units (sim::Balovnev checks the rest).
+  auto require = [](bool ok, const std::string& flag, const std::string& expected, double got) {
+    if (!ok)
+      throw sim::InputError("study balovnev: " + flag + ": expected " + expected + ", got " +
+                            CLI::detail::to_string(got));
+  };
+  require(args.phi > 0 && args.phi < 90, "--phi-deg", "a value in (0, 90)", args.phi);
+  require(args.delta >= 0 && args.delta <= args.phi, "--delta-deg", "a value in [0, --phi-deg]",
+          args.delta);
+  require(args.rake > 0 && args.rake <= 90, "--rake-deg", "a value in (0, 90]", args.rake);
+  constexpr double kDeg = 3.14159265358979323846 / 180;
+  options.soil.friction_angle = args.phi * kDeg;
+  options.soil.tool_friction_angle = args.delta * kDeg;
+  options.tool.rake = args.rake * kDeg;
+  options.buried = args.buried;
+  options.show_textbook = args.model != "lander";
+  options.show_lander = args.model != "textbook";
+  return sim::RunBalovnevStudy(scene, options);
+}
+
+Command Balovnev(CLI::App* study) {
+  auto args = std::make_shared<BalovnevArgs>();
+  CLI::App* command = AddStudy(
+      study, args.get(), "balovnev",
+      "The scene's dig (pass 1) against Balovnev's analytical model (../shared/FACTS.md section "
+      "7) along the same path: OUT.h5 (the dig), OUT.balovnev.csv, a table on stdout, "
+      "OUT.balovnev.png",
+      "out/balovnev.h5");
+  command->add_option("--phi-deg", args->phi, "Internal friction angle phi [deg]")
+      ->capture_default_str();
+  command->add_option("--delta-deg", args->delta, "Soil-tool friction angle delta [deg], <= phi")
+      ->capture_default_str();
+  command->add_option("--rake-deg", args->rake, "Rake angle beta of the blade [deg]")
+      ->capture_default_str();
+  command->add_flag("--buried", args->buried, "b = 1: the bucket is buried (default b = 0)");
+  command->add_flag("--no-plot", args->no_plot, "Do not draw OUT.balovnev.png");
+  command
+      ->add_option("--model", args->model,
+                   "Which Balovnev the table and plot show: textbook (FACTS 7's formula, the "
+                   "bed's gamma), lander (the OceanWATERS plugin's variant: its constants, "
+                   "branch and caps) or both; the CSV always has both")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"textbook", "lander", "both"}));
+  return {Given(command), [args] { return BalovnevCommand(*args); }, SetsOf(args)};
+}
+
+// The particle-size study: its cases are a sweep (resumed, MPI, --case), so its options are a
+// sweep's rather than a run's.
+Command ParticleSize(CLI::App* study) {
+  struct Args {
+    std::string scene;
+    sim::SizeStudyOptions options;
+    bool no_plot = false;
+  };
+  auto args = std::make_shared<Args>();
+  sim::SizeStudyOptions& options = args->options;
+  CLI::App* command = study->add_subcommand(
+      "particle-size",
+      "Particle-size study (paper eq. 5-7, Fig. 3-6): the scene's dig on beds of each diameter "
+      "(the same solid volume), several beds each, run as a sweep; MPE of the smoothed peak "
+      "|F| and |T| against the finest size, the largest size within 20%: DIR/size_study.csv, "
+      "a table on stdout, DIR/size_*.png");
+  command
+      ->add_option("SCENE", args->scene,
+                   "A size-study scene: spheres of one diameter, poured, one pass "
+                   "(scenes/paper/size_S10.yaml)")
+      ->required();
+  command->add_option("-o,--output", options.dir, "Output folder")->capture_default_str();
+  command
+      ->add_option("--sizes", options.sizes_mm,
+                   "Diameters [mm], comma separated (default: the study's eq. 5, "
+                   "2,2.5,3.25,4,5.25,6.5,8.25,10)")
+      ->delimiter(',')
+      ->check(tools::FinitePositive("mm"));  // each diameter as written ('' was read as 0)
+  command->add_option("--beds", options.beds, "Independent beds (seeds) per size")
+      ->capture_default_str();
+  command
+      ->add_option("--smooth-s", options.smooth_s,
+                   "Window of the centred moving mean of |F| and |T| [s]")
+      ->capture_default_str();
+  command
+      ->add_option("--case", options.only_case,
+                   "Run only case I (0-based, the order of --list): one task of a job array")
+      ->check(tools::WholeNonNegative());
+  command
+      ->add_option("--threads", options.threads,
+                   "DEM threads per case; 0 = all cores (default: the scene's `threads` when "
+                   "plain, 1 per rank under mpirun)")
+      ->check(CLI::Range(0, kMaxThreads));
+  command
+      ->add_option("--prior", options.priors,
+                   "An earlier run's DIR/size_study.csv (same scene, same --smooth-s): its sizes "
+                   "join this run's in eq. 6-7 without being run again (rows only: peaks, beds, "
+                   "cost); repeatable, a size run here or in an earlier file wins")
+      ->check(CLI::ExistingFile);
+  command
+      ->add_option("--checkpoint-every", options.checkpoint_every,
+                   "Keep a running case's state (its pour so far, or its dig) every this many "
+                   "seconds of wall time and when stopped, so that the same command goes on "
+                   "from there bit for bit; 0 = never")
+      ->capture_default_str()
+      ->check(tools::FiniteNonNegative("s"));
+  command->add_flag("--list", options.list,
+                    "Print the cases (index, name, settings, cost, where each stands in DIR) "
+                    "and exit");
+  command->add_flag("--no-plot", args->no_plot, "Do not draw DIR/size_*.png");
+  command->add_flag("-q,--quiet", options.quiet, "No progress line within a case");
+  return {Given(command),
+          [args] {
+            args->options.plot = !args->no_plot;
+            return sim::RunSizeStudy(args->scene, args->options);
+          },
+          nullptr};
+}
+
+Command BenchSettle(CLI::App* bench) {
+  struct Args {
+    sim::BenchSettleOptions options;
+    bool quiet = false;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* command =
+      bench->add_subcommand("settle", "Time the DEM step on a settled bed (prints one JSON line)");
+  command->add_option("--particles", args->options.particles, "Number of spheres")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{1000000000}));
+  command->add_option("--steps", args->options.steps, "Time steps to time")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{1000000000}));
+  command->add_option("--threads", args->options.threads, "Worker threads; 0 = all cores")
+      ->capture_default_str()
+      ->check(CLI::Range(0, kMaxThreads));
+  command->add_flag("-q,--quiet", args->quiet, "No progress output (the JSON line is kept)");
+  return {Given(command), [args] { return sim::BenchSettle(args->options); }, nullptr};
+}
+
+Command BenchStep(CLI::App* bench) {
+  auto options = std::make_shared<sim::BenchStepOptions>();
+  CLI::App* command = bench->add_subcommand(
+      "step", "Time a scene's step from its saved bed, e.g. a mid-dig state (one JSON line)");
+  command->add_option("SCENE", options->scene, "Scene file (YAML) with a bed file")->required();
+  command->add_option("--warm", options->warm, "Steps run before the timing")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{0}, int64_t{1000000000}));
+  command->add_option("--steps", options->steps, "Time steps to time")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{1000000000}));
+  command->add_option("--threads", options->threads, "Worker threads; 0 = all cores")
+      ->capture_default_str()
+      ->check(CLI::Range(0, kMaxThreads));
+  command->add_option("--arm", options->arm,
+                      "A URDF (the lander's arm): step it once per DEM step beside the bed, its "
+                      "time apart (arm_ms_per_step)");
+  return {Given(command), [options] { return sim::BenchStep(*options); }, nullptr};
+}
+
+Command BenchRender(CLI::App* bench) {
+  auto options = std::make_shared<render::BenchRenderOptions>();
+  CLI::App* command = bench->add_subcommand(
+      "render",
+      "Frames per second of the renderer at 1280x720, PNG writing included (one JSON line)");
+  command->add_option("--particles", options->particles, "Number of spheres")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{100000000}));
+  command->add_option("--frames", options->frames, "Frames to time")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  command
+      ->add_option("--threads", options->threads,
+                   "Rasteriser threads (LP_NUM_THREADS); 0 = the environment's or all cores")
+      ->capture_default_str()
+      ->check(CLI::Range(0, kMaxThreads));
+  command->add_option("--keep", options->keep_dir,
+                      "Write the frames into this folder and keep them (default: a temporary "
+                      "folder, removed)");
+  command->add_flag("!--no-cull", options->cull_hidden,
+                    "Hand every particle to GL (no occlusion culling), to measure it");
+  command->add_option("--png-level", options->png_level, "zlib level of the PNGs")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 9));
+  return {Given(command), [options] { return render::BenchRender(*options); }, nullptr};
+}
+
+// `sweep` and `table build|query|export-csv` (tools/sweep_cli.h).
+Command SweepAndTable(CLI::App* parent) {
+  auto commands = std::make_shared<tools::SweepCommands>();
+  commands->AddTo(parent);
+  const CLI::App* sweep = parent->get_subcommand("sweep");
+  const CLI::App* table = parent->get_subcommand("table");
+  return {[sweep, table] { return *sweep || *table; }, [commands] { return commands->Run(); },
+          nullptr};
+}
+
+Command ArmInfo(CLI::App* arm) {
+  struct Args {
+    std::string urdf;
+    double gravity = 1.3;  // [m/s^2]
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* command = arm->add_subcommand(
+      "info", "Print the parsed arm (joints, limits, masses) and gravity torques at named poses");
+  command->add_option("URDF", args->urdf, "The arm's URDF, e.g. assets/lander_arm.urdf")
+      ->required();
+  command->add_option("--gravity", args->gravity, "Gravity [m/s^2] along -z of the base link")
+      ->capture_default_str()
+      ->check(tools::FiniteInRange(0, 1000, "m/s^2"));  // past it the torques overflow
+  return {Given(command),
+          [args] {
+            tools::PrintArmInfo(args->urdf, args->gravity, stdout);
+            return 0;
+          },
+          nullptr};
+}
+
+// Commands that hold subcommands (`scoopsim study shape`), made when their first one is added.
+struct Group {
+  const char* name;
+  const char* help;
+};
+constexpr Group kGroups[] = {
+    {"study", "Studies of the reference paper"},
+    {"bench", "Benchmarks"},
+    {"arm", "The arm alone (its URDF), without the DEM"},
+};
+
+// Every subcommand, in the order of --help: its group ("" for a top-level command) and setup.
+struct Entry {
+  const char* group;
+  Setup setup;
+};
+constexpr Entry kCommands[] = {
+    {"", Bed},
+    {"", Run},
+    {"", Check},
+    {"", Render},
+    {"study", Shape},
+    {"study", Balovnev},
+    {"study", ParticleSize},
+    {"bench", BenchSettle},
+    {"bench", BenchStep},
+    {"bench", BenchRender},
+    {"", SweepAndTable},
+    {"arm", ArmInfo},
+};
+
 int Main(int argc, char** argv) {
   CLI::App app{"scoopsim: DEM simulation of a lander scoop digging granular terrain"};
   app.set_version_flag("--version", std::string("scoopsim ") + SCOOPSIM_VERSION);
@@ -282,229 +776,23 @@ int Main(int argc, char** argv) {
   app.failure_message([](const CLI::App*, const CLI::Error& e) {
     return "scoopsim: " + OneLine(e.what()) + " (see --help)\n";
   });
-
-  SceneCommand bed_args;
-  CLI::App* bed = app.add_subcommand("bed", "Fill the scene's box, settle the bed and save it");
-  bed_args.AddTo(bed, "out/bed.h5", true);
-
-  SceneCommand run_args;
-  CLI::App* run = app.add_subcommand(
-      "run", "Run a scene for its duration (loads bed.file, or makes the bed first)");
-  run_args.AddTo(run, "out/run.h5", true);
-  double run_stop_after = 0;
-  run->add_option("--stop-after", run_stop_after,
-                  "Stop after this many simulated seconds, the output closed as on SIGINT "
-                  "(default: at the scene's end)")
-      ->check(tools::FinitePositive("s"));
-  double run_checkpoint_every = 0;
-  run->add_option("--checkpoint-every", run_checkpoint_every,
-                  "Keep the run's whole state in OUT.restart.h5 every this many seconds of wall "
-                  "time (and when stopped by a signal); removed when the run ends")
-      ->check(tools::FinitePositive("s"));
-  std::string run_resume;
-  run->add_option("--resume", run_resume,
-                  "Go on from OUT.restart.h5 of this output (SCENE, if given, must be the one it "
-                  "was made from); the output ends as the uninterrupted run's")
-      ->option_text("OUT.h5");
-  run_args.scene_option->required(false);
-  FramesArgs run_frames;
-  run_frames.AddTo(run, false, true);
-
-  std::string check_scene;
-  CLI::App* check = app.add_subcommand(
-      "check",
-      "Check a scene as `run` would before any work (the scene, its mesh and bed file, the time "
-      "step, the steps and memory the run needs, the dig's path) and print the forecast");
-  check->add_option("SCENE", check_scene, "Scene file (YAML)")->required();
-  std::vector<std::string> check_sets;
-  AddSetOption(check, &check_sets);
-
-  FramesArgs render_frames;
-  std::string render_input;
-  bool render_quiet = false;
-  int render_threads = 0;
-  CLI::App* render_cmd = app.add_subcommand(
-      "render",
-      "Render the particle snapshots of a saved run (scoopsim run -o OUT.h5) as PNG frames");
-  render_cmd->add_option("OUT.h5", render_input, "A run's HDF5 file")->required();
-  render_frames.AddTo(render_cmd, true, false);
-  render_cmd
-      ->add_option("--threads", render_threads,
-                   "Rasteriser threads (LP_NUM_THREADS); 0 = all cores")
-      ->check(CLI::Range(0, kMaxThreads));
-  render_cmd->add_flag("-q,--quiet", render_quiet, "No progress output");
-
-  CLI::App* study = app.add_subcommand("study", "Studies of the reference paper");
-  study->require_subcommand(1);
-  // A study: a subcommand with a scene, an output, --threads and --quiet.
-  auto add_study = [study](SceneCommand* args, const char* name, const char* help,
-                           const char* output) {
-    CLI::App* command = study->add_subcommand(name, help);
-    args->AddTo(command, output, false);
-    return command;
-  };
-  SceneCommand shape_args;
-  CLI::App* shape = add_study(
-      &shape_args, "shape",
-      "Shape-complexity study (paper Table 3, Fig. 8): the scene's dig on a bed of each clump "
-      "template; wrench and wall time per template in one HDF5 file",
-      "out/shape_study.h5");
-  std::vector<std::string> shape_templates;
-  std::string shape_beds;
-  shape
-      ->add_option("--templates", shape_templates,
-                   "Clump templates, comma separated (default: tetra1,tetra4,tetra8,tetra12)")
-      ->delimiter(',');
-  shape->add_option("--beds", shape_beds,
-                    "Folder of the beds: DIR/<template>.h5 is loaded if present and made from "
-                    "the same scene text, else made and saved there");
-
-  SceneCommand balovnev_args;
-  CLI::App* balovnev = add_study(
-      &balovnev_args, "balovnev",
-      "The scene's dig (pass 1) against Balovnev's analytical model (../shared/FACTS.md section "
-      "7) along the same path: OUT.h5 (the dig), OUT.balovnev.csv, a table on stdout, "
-      "OUT.balovnev.png",
-      "out/balovnev.h5");
-  double balovnev_phi = 44, balovnev_delta = 28, balovnev_rake = 10;
-  bool balovnev_buried = false, balovnev_no_plot = false;
-  balovnev->add_option("--phi-deg", balovnev_phi, "Internal friction angle phi [deg]")
-      ->capture_default_str();
-  balovnev
-      ->add_option("--delta-deg", balovnev_delta, "Soil-tool friction angle delta [deg], <= phi")
-      ->capture_default_str();
-  balovnev->add_option("--rake-deg", balovnev_rake, "Rake angle beta of the blade [deg]")
-      ->capture_default_str();
-  balovnev->add_flag("--buried", balovnev_buried, "b = 1: the bucket is buried (default b = 0)");
-  balovnev->add_flag("--no-plot", balovnev_no_plot, "Do not draw OUT.balovnev.png");
-  std::string balovnev_model = "both";
-  balovnev
-      ->add_option("--model", balovnev_model,
-                   "Which Balovnev the table and plot show: textbook (FACTS 7's formula, the "
-                   "bed's gamma), lander (the OceanWATERS plugin's variant: its constants, "
-                   "branch and caps) or both; the CSV always has both")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"textbook", "lander", "both"}));
-
-  // The particle-size study: its cases are a sweep (resumed, MPI, --case), so its options are a
-  // sweep's rather than a run's.
-  std::string size_scene;
-  sim::SizeStudyOptions size_options;
-  bool size_no_plot = false;
-  CLI::App* size = study->add_subcommand(
-      "particle-size",
-      "Particle-size study (paper eq. 5-7, Fig. 3-6): the scene's dig on beds of each diameter "
-      "(the same solid volume), several beds each, run as a sweep; MPE of the smoothed peak "
-      "|F| and |T| against the finest size, the largest size within 20%: DIR/size_study.csv, "
-      "a table on stdout, DIR/size_*.png");
-  size->add_option("SCENE", size_scene,
-                   "A size-study scene: spheres of one diameter, poured, one pass "
-                   "(scenes/paper/size_S10.yaml)")
-      ->required();
-  size->add_option("-o,--output", size_options.dir, "Output folder")->capture_default_str();
-  size->add_option("--sizes", size_options.sizes_mm,
-                   "Diameters [mm], comma separated (default: the study's eq. 5, "
-                   "2,2.5,3.25,4,5.25,6.5,8.25,10)")
-      ->delimiter(',')
-      ->check(tools::FinitePositive("mm"));  // each diameter as written ('' was read as 0)
-  size->add_option("--beds", size_options.beds, "Independent beds (seeds) per size")
-      ->capture_default_str();
-  size->add_option("--smooth-s", size_options.smooth_s,
-                   "Window of the centred moving mean of |F| and |T| [s]")
-      ->capture_default_str();
-  size->add_option("--case", size_options.only_case,
-                   "Run only case I (0-based, the order of --list): one task of a job array")
-      ->check(tools::WholeNonNegative());
-  size->add_option("--threads", size_options.threads,
-                   "DEM threads per case; 0 = all cores (default: the scene's `threads` when "
-                   "plain, 1 per rank under mpirun)")
-      ->check(CLI::Range(0, kMaxThreads));
-  size->add_option("--prior", size_options.priors,
-                   "An earlier run's DIR/size_study.csv (same scene, same --smooth-s): its sizes "
-                   "join this run's in eq. 6-7 without being run again (rows only: peaks, beds, "
-                   "cost); repeatable, a size run here or in an earlier file wins")
-      ->check(CLI::ExistingFile);
-  size->add_option("--checkpoint-every", size_options.checkpoint_every,
-                   "Keep a running case's state (its pour so far, or its dig) every this many "
-                   "seconds of wall time and when stopped, so that the same command goes on "
-                   "from there bit for bit; 0 = never")
-      ->capture_default_str()
-      ->check(tools::FiniteNonNegative("s"));
-  size->add_flag("--list", size_options.list,
-                 "Print the cases (index, name, settings, cost, where each stands in DIR) "
-                 "and exit");
-  size->add_flag("--no-plot", size_no_plot, "Do not draw DIR/size_*.png");
-  size->add_flag("-q,--quiet", size_options.quiet, "No progress line within a case");
-
-  CLI::App* bench = app.add_subcommand("bench", "Benchmarks");
-  bench->require_subcommand(1);
-  CLI::App* settle =
-      bench->add_subcommand("settle", "Time the DEM step on a settled bed (prints one JSON line)");
-  sim::BenchSettleOptions bench_options;
-  bool bench_quiet = false;
-  settle->add_option("--particles", bench_options.particles, "Number of spheres")
-      ->capture_default_str()
-      ->check(CLI::Range(int64_t{1}, int64_t{1000000000}));
-  settle->add_option("--steps", bench_options.steps, "Time steps to time")
-      ->capture_default_str()
-      ->check(CLI::Range(int64_t{1}, int64_t{1000000000}));
-  settle->add_option("--threads", bench_options.threads, "Worker threads; 0 = all cores")
-      ->capture_default_str()
-      ->check(CLI::Range(0, kMaxThreads));
-  settle->add_flag("-q,--quiet", bench_quiet, "No progress output (the JSON line is kept)");
-  CLI::App* step = bench->add_subcommand(
-      "step", "Time a scene's step from its saved bed, e.g. a mid-dig state (one JSON line)");
-  sim::BenchStepOptions step_options;
-  step->add_option("SCENE", step_options.scene, "Scene file (YAML) with a bed file")->required();
-  step->add_option("--warm", step_options.warm, "Steps run before the timing")
-      ->capture_default_str()
-      ->check(CLI::Range(int64_t{0}, int64_t{1000000000}));
-  step->add_option("--steps", step_options.steps, "Time steps to time")
-      ->capture_default_str()
-      ->check(CLI::Range(int64_t{1}, int64_t{1000000000}));
-  step->add_option("--threads", step_options.threads, "Worker threads; 0 = all cores")
-      ->capture_default_str()
-      ->check(CLI::Range(0, kMaxThreads));
-  step->add_option("--arm", step_options.arm,
-                   "A URDF (the lander's arm): step it once per DEM step beside the bed, its "
-                   "time apart (arm_ms_per_step)");
-  CLI::App* bench_render = bench->add_subcommand(
-      "render",
-      "Frames per second of the renderer at 1280x720, PNG writing included (one JSON line)");
-  render::BenchRenderOptions render_bench;
-  bench_render->add_option("--particles", render_bench.particles, "Number of spheres")
-      ->capture_default_str()
-      ->check(CLI::Range(int64_t{1}, int64_t{100000000}));
-  bench_render->add_option("--frames", render_bench.frames, "Frames to time")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 100000));
-  bench_render
-      ->add_option("--threads", render_bench.threads,
-                   "Rasteriser threads (LP_NUM_THREADS); 0 = the environment's or all cores")
-      ->capture_default_str()
-      ->check(CLI::Range(0, kMaxThreads));
-  bench_render->add_option("--keep", render_bench.keep_dir,
-                           "Write the frames into this folder and keep them (default: a temporary "
-                           "folder, removed)");
-  bench_render->add_flag("!--no-cull", render_bench.cull_hidden,
-                         "Hand every particle to GL (no occlusion culling), to measure it");
-  bench_render->add_option("--png-level", render_bench.png_level, "zlib level of the PNGs")
-      ->capture_default_str()
-      ->check(CLI::Range(0, 9));
-
-  tools::SweepCommands sweep_commands;  // sweep, table build / query / export-csv
-  sweep_commands.AddTo(&app);
-
-  CLI::App* arm_cmd = app.add_subcommand("arm", "The arm alone (its URDF), without the DEM");
-  arm_cmd->require_subcommand(1);
-  CLI::App* arm_info = arm_cmd->add_subcommand(
-      "info", "Print the parsed arm (joints, limits, masses) and gravity torques at named poses");
-  std::string arm_urdf;
-  double arm_gravity = 1.3;
-  arm_info->add_option("URDF", arm_urdf, "The arm's URDF, e.g. assets/lander_arm.urdf")->required();
-  arm_info->add_option("--gravity", arm_gravity, "Gravity [m/s^2] along -z of the base link")
-      ->capture_default_str()
-      ->check(tools::FiniteInRange(0, 1000, "m/s^2"));  // past it the torques overflow
+  std::vector<Command> commands;
+  std::map<std::string, CLI::App*> groups;
+  for (const Entry& entry : kCommands) {
+    CLI::App* parent = &app;
+    if (*entry.group != '\0') {
+      CLI::App*& group = groups[entry.group];
+      if (group == nullptr) {
+        const Group* g = std::find_if(std::begin(kGroups), std::end(kGroups), [&](const Group& g) {
+          return std::string(g.name) == entry.group;
+        });
+        group = app.add_subcommand(g->name, g->help);
+        group->require_subcommand(1);
+      }
+      parent = group;
+    }
+    commands.push_back(entry.setup(parent));
+  }
 
   if (const std::string unknown = UnknownCommand(&app, argc, argv); !unknown.empty()) {
     std::fprintf(stderr, "%s\n", unknown.c_str());
@@ -517,169 +805,22 @@ int Main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : kExitInput;
   }
 
+  const auto given =
+      std::find_if(commands.begin(), commands.end(), [](const Command& c) { return c.given(); });
+  if (given == commands.end()) return kExitInput;  // unreachable: a subcommand is required
   try {
-    if (*bed) {
-      sim::Scene scene = sim::LoadScene(bed_args.scene, bed_args.sets);
-      sim::Preflight(&scene, sim::Work::kBed);
-      PrintWarnings(scene);
-      return sim::MakeBed(scene, bed_args.Options(scene));
-    }
-    if (*run) {
-      if (run_args.scene.empty() && run_resume.empty())
-        throw sim::InputError("run: SCENE: expected a scene file (or --resume OUT.h5)");
-      if (run_args.scene.empty() && !run_args.sets.empty())
-        throw sim::InputError(
-            "run: --set: expected a SCENE to set keys of (a run resumed without "
-            "one goes on with its checkpoint's scene, the --set it had included)");
-      if (!run_resume.empty() && run_args.output_option->count() > 0 &&
-          run_args.output != run_resume)
-        throw sim::InputError("run: -o " + run_args.output + " and --resume " + run_resume +
-                              ": a resumed run writes the output it resumes; give one of them");
-      // Resumed without SCENE: the scene text and path its checkpoint holds.
-      sim::Scene scene =
-          !run_args.scene.empty() ? sim::LoadScene(run_args.scene, run_args.sets) : [&] {
-            const sim::Checkpoint c = sim::ReadCheckpoint(sim::CheckpointPath(run_resume));
-            return sim::LoadSceneText(c.scene_path, c.scene_yaml);
-          }();
-      sim::Preflight(&scene, sim::Work::kRun);
-      PrintWarnings(scene);
-      sim::RunOptions options = run_args.Options(scene);
-      options.stop_after = run_stop_after;
-      options.checkpoint_every = run_checkpoint_every;
-      if (!run_resume.empty()) {
-        options.resume = true;
-        options.output = run_resume;
-      }
-      std::unique_ptr<render::FrameSequence> frames;
-      if (!run_frames.dir.empty()) {
-        // The frames' folder would be made where the output goes ("Is a directory").
-        std::error_code ec;
-        const std::filesystem::path frames_at =
-            std::filesystem::weakly_canonical(run_frames.dir, ec);
-        if (!ec && frames_at == std::filesystem::weakly_canonical(options.output, ec)) {
-          throw sim::InputError("--frames " + run_frames.dir +
-                                ": expected a folder other than the output file (-o " +
-                                options.output + ")");
-        }
-        // Checked before the renderer is made (an OpenGL context): at most a frame a step, a
-        // spacing below the time step is a typo (1e-300 for 1e-3).
-        options.frame_every = run_frames.every > 0 ? run_frames.every : scene.render.every;
-        if (options.frame_every > 0 && options.frame_every < scene.time_step) {
-          char text[96];
-          std::snprintf(text, sizeof text,
-                        ": expected at least the time step (%.6g s) between frames, got %.6g",
-                        scene.time_step, options.frame_every);
-          throw sim::InputError(
-              (run_frames.every > 0 ? std::string("--every") : scene.path + ": render.every") +
-              text);
-        }
-        // Rendering happens inside the run loop's frame callback, between steps: the DEM's
-        // OpenMP threads are idle then, and llvmpipe gets as many threads as the DEM had.
-        render::FrameOptions frame_options =
-            run_frames.Options(scene.render, options.threads > 0 ? options.threads : AllCores());
-        if (!frame_options.range_given) {
-          render::SceneColorRange(scene, frame_options.settings.color_by,
-                                  &frame_options.settings.range_min,
-                                  &frame_options.settings.range_max);
-        }
-        frames = std::make_unique<render::FrameSequence>(frame_options);
-        options.on_frame = [&frames](const sim::WorldView& view) { frames->Add(view); };
-      }
-      const int status = sim::RunScene(scene, options);
-      if (frames) {
-        std::fprintf(stderr, "scoopsim: %d frames in %s (%.0f ms draw + %.0f ms PNG a frame)\n",
-                     frames->count(), run_frames.dir.c_str(),
-                     1e3 * frames->draw_seconds() / std::max(frames->count(), 1),
-                     1e3 * frames->png_seconds() / std::max(frames->count(), 1));
-        run_frames.MaybeVideo();
-      }
-      return status;
-    }
-    if (*check) {
-      sim::Scene scene = sim::LoadScene(check_scene, check_sets);
-      const sim::RunForecast f = sim::Preflight(&scene, sim::Work::kRun);
-      PrintWarnings(scene);
-      std::printf(
-          "%s: ok: %lld particles, time step %.4g s, %.4g s simulated in about %.3g "
-          "steps, about %.3g MB of memory\n",
-          check_scene.c_str(), static_cast<long long>(f.particles), f.time_step, f.simulated,
-          f.steps, f.bytes / 1e6);
-      return 0;
-    }
-    if (*render_cmd) {
-      // Camera, colouring and size from the run's own scene (its `render:` block), then the
-      // command line.
-      const sim::RenderSpec spec = sim::SavedRun(render_input).Scene().render;
-      render::FrameSequence frames(
-          render_frames.Options(spec, render_threads > 0 ? render_threads : AllCores()));
-      const int count = render::RenderSavedRun(render_input, &frames, render_quiet);
-      std::fprintf(stderr, "scoopsim: %d frames in %s\n", count, render_frames.dir.c_str());
-      render_frames.MaybeVideo();
-      return 0;
-    }
-    if (*shape) {
-      const sim::Scene scene = sim::LoadScene(shape_args.scene, shape_args.sets);
-      auto options = shape_args.OptionsAs<sim::ShapeStudyOptions>(scene);
-      options.templates = shape_templates;
-      options.bed_dir = shape_beds;
-      return sim::RunShapeStudy(scene, options);
-    }
-    if (*balovnev) {
-      const sim::Scene scene = sim::LoadScene(balovnev_args.scene, balovnev_args.sets);
-      auto options = balovnev_args.OptionsAs<sim::BalovnevStudyOptions>(scene);
-      options.plot = !balovnev_no_plot;
-      // The angles' domain, in the flags' own units (sim::Balovnev checks the rest).
-      auto require = [](bool ok, const std::string& flag, const std::string& expected, double got) {
-        if (!ok)
-          throw sim::InputError("study balovnev: " + flag + ": expected " + expected + ", got " +
-                                CLI::detail::to_string(got));
-      };
-      require(balovnev_phi > 0 && balovnev_phi < 90, "--phi-deg", "a value in (0, 90)",
-              balovnev_phi);
-      require(balovnev_delta >= 0 && balovnev_delta <= balovnev_phi, "--delta-deg",
-              "a value in [0, --phi-deg]", balovnev_delta);
-      require(balovnev_rake > 0 && balovnev_rake <= 90, "--rake-deg", "a value in (0, 90]",
-              balovnev_rake);
-      constexpr double kDeg = 3.14159265358979323846 / 180;
-      options.soil.friction_angle = balovnev_phi * kDeg;
-      options.soil.tool_friction_angle = balovnev_delta * kDeg;
-      options.tool.rake = balovnev_rake * kDeg;
-      options.buried = balovnev_buried;
-      options.show_textbook = balovnev_model != "lander";
-      options.show_lander = balovnev_model != "textbook";
-      return sim::RunBalovnevStudy(scene, options);
-    }
-    if (*size) {
-      size_options.plot = !size_no_plot;
-      return sim::RunSizeStudy(size_scene, size_options);
-    }
-    if (*settle) return sim::BenchSettle(bench_options);
-    if (*step) return sim::BenchStep(step_options);
-    if (*bench_render) return render::BenchRender(render_bench);
-    if (const int status = sweep_commands.Run(); status >= 0) return status;
-    if (*arm_info) {
-      tools::PrintArmInfo(arm_urdf, arm_gravity, stdout);
-      return 0;
-    }
+    return given->run();
   } catch (const arm::ArmModelError& e) {
     std::fprintf(stderr, "scoopsim: %s\n", OneLine(e.what()).c_str());
     return kExitInput;
   } catch (const sim::InputError& e) {
-    // An error found after the scene was loaded (its preflight) about a key given by --set names
-    // the --set, as LoadScene's own errors do.
-    const std::vector<std::string>& sets = *bed        ? bed_args.sets
-                                           : *run      ? run_args.sets
-                                           : *check    ? check_sets
-                                           : *shape    ? shape_args.sets
-                                           : *balovnev ? balovnev_args.sets
-                                                       : check_sets;
-    std::fprintf(stderr, "scoopsim: %s\n", OneLine(sim::NamingSet(e, sets).what()).c_str());
+    const sim::InputError named = given->sets ? sim::NamingSet(e, *given->sets) : e;
+    std::fprintf(stderr, "scoopsim: %s\n", OneLine(named.what()).c_str());
     return kExitInput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "scoopsim: error: %s\n", OneLine(e.what()).c_str());
     return kExitFailure;
   }
-  return kExitInput;  // unreachable: a subcommand is required
 }
 
 // Waiting OpenMP threads spin briefly, then sleep, unless the user chose otherwise

@@ -2,8 +2,6 @@
 // queried, exported as the lander simulator's CSV.
 #include "sim/files/wrench_table.h"
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -43,43 +41,39 @@ std::string Shortest(double v) {
   return std::string(s, r.ptr);
 }
 
-// What a case's stored scene says about its table cell.
-struct CaseScene {
-  std::string material;
-  double bite_depth = 0;      // [m]
-  std::string particle_size;  // "spheres r 8 mm", "clumps tetra4", ...
-};
+// "spheres r 8 mm", "spheres r 4 mm to 8 mm", "clumps tetra4": the table's particle_size.
+std::string ParticleSize(const std::string& clump, double radius_min, double radius_max) {
+  if (!clump.empty()) return "clumps " + clump;
+  if (radius_min != radius_max) return "spheres r " + Mm(radius_min) + " to " + Mm(radius_max);
+  return "spheres r " + Mm(radius_max);
+}
 
-CaseScene ReadCaseScene(const std::string& file, const std::string& text) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw InputError(file + ": scene_yaml: not valid YAML (" + e.msg + ")");
+// The root attributes of a case's output that say which cell it fills (WriteTableCell).
+constexpr const char* kCellMaterial = "table_material";
+constexpr const char* kCellBiteDepth = "table_bite_depth";
+constexpr const char* kCellParticleSize = "table_particle_size";
+
+// What a case says about its table cell: the attributes WriteTableCell wrote from its validated
+// scene, or, in a case file made before them, its stored scene text (sim::ParseStoredDig).
+TableCell ReadTableCell(const h5::Reader& r, const std::string& file, const std::string& text) {
+  TableCell cell;
+  if (r.HasAttribute("/", kCellMaterial)) {
+    cell.material = r.ReadStringAttribute("/", kCellMaterial);
+    cell.bite_depth = r.ReadDoubleAttribute("/", kCellBiteDepth);
+    cell.particle_size = r.ReadStringAttribute("/", kCellParticleSize);
+    return cell;
   }
-  CaseScene s;
-  const YAML::Node bed = root["bed"];
-  const YAML::Node dig = root["dig"];
-  if (!bed || !bed["material"] || !dig) {
-    throw InputError(file + ": scene_yaml: expected a scene with bed.material and a dig");
-  }
-  s.material = bed["material"].as<std::string>();
-  s.bite_depth = dig["bite_depth"] ? dig["bite_depth"].as<double>() : DigSpec{}.bite_depth;
-  if (bed["clump"]) {
-    s.particle_size = "clumps " + bed["clump"].as<std::string>();
-  } else if (bed["radius"] && bed["radius"].IsSequence() && bed["radius"].size() == 2) {
-    s.particle_size = "spheres r " + Mm(bed["radius"][0].as<double>()) + " to " +
-                      Mm(bed["radius"][1].as<double>());
-  } else if (bed["radius"]) {
-    s.particle_size = "spheres r " + Mm(bed["radius"].as<double>());
-  }
-  return s;
+  const StoredDig stored = ParseStoredDig(text, file + ":scene_yaml");
+  cell.material = stored.material;
+  cell.bite_depth = stored.bite_depth;
+  cell.particle_size = ParticleSize(stored.clump, stored.radius_min, stored.radius_max);
+  return cell;
 }
 
 // One case's rows, the 12 wrench components of a row side by side.
 struct CaseRows {
   std::string file, name, scene_yaml;
-  CaseScene scene;
+  TableCell cell;
   std::vector<double> pass, rho, contacts;
   std::vector<std::array<double, 12>> wrench;
 };
@@ -91,7 +85,7 @@ CaseRows ReadCase(const fs::path& path, RhoDefinition rho) {
   const h5::Handle file = h5::OpenForReading(c.file, true);
   const h5::Reader r(c.file, file.get());
   c.scene_yaml = r.ReadStringAttribute("/", "scene_yaml");
-  c.scene = ReadCaseScene(c.file, c.scene_yaml);
+  c.cell = ReadTableCell(r, c.file, c.scene_yaml);
   if (!r.Exists("/scoop/time")) r.Fail("/scoop/time", "missing: not the output of a dig");
   int64_t n = 0;
   r.Read<double>("/scoop/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1, &n);
@@ -206,6 +200,18 @@ std::vector<double> ReadNd(const h5::Reader& r, const std::string& name,
 
 }  // namespace
 
+TableCell TableCellOf(const Scene& scene) {
+  return {scene.bed.material, scene.dig.bite_depth,
+          ParticleSize(scene.bed.clump, scene.bed.radius_min, scene.bed.radius_max)};
+}
+
+void WriteTableCell(const Scene& scene, H5Output* out) {
+  const TableCell cell = TableCellOf(scene);
+  out->SetAttribute(kCellMaterial, cell.material);
+  out->SetAttribute(kCellBiteDepth, cell.bite_depth);
+  out->SetAttribute(kCellParticleSize, cell.particle_size);
+}
+
 const char* RhoDefinitionName(RhoDefinition d) {
   return d == RhoDefinition::kPath ? "path" : "along";
 }
@@ -261,9 +267,9 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
   std::set<double> depth_set;
   int max_pass = 0;
   for (const CaseRows& c : cases) {
-    if (std::find(materials.begin(), materials.end(), c.scene.material) == materials.end())
-      materials.push_back(c.scene.material);
-    depth_set.insert(c.scene.bite_depth);
+    if (std::find(materials.begin(), materials.end(), c.cell.material) == materials.end())
+      materials.push_back(c.cell.material);
+    depth_set.insert(c.cell.bite_depth);
     for (double p : c.pass) max_pass = std::max(max_pass, static_cast<int>(p));
   }
   std::sort(materials.begin(), materials.end(), [](const std::string& a, const std::string& b) {
@@ -301,15 +307,15 @@ std::string BuildWrenchTable(const std::string& dir, const std::string& table_pa
   std::vector<std::string> particle_size(M);
   for (const CaseRows& c : cases) {
     const size_t m =
-        std::find(materials.begin(), materials.end(), c.scene.material) - materials.begin();
-    const size_t b = std::find(depths.begin(), depths.end(), c.scene.bite_depth) - depths.begin();
+        std::find(materials.begin(), materials.end(), c.cell.material) - materials.begin();
+    const size_t b = std::find(depths.begin(), depths.end(), c.cell.bite_depth) - depths.begin();
     if (!cell_case[m * B + b].empty()) {
-      throw InputError(c.file + ": a second case of material " + c.scene.material +
-                       " and bite depth " + Mm(c.scene.bite_depth) + " (the first is " +
+      throw InputError(c.file + ": a second case of material " + c.cell.material +
+                       " and bite depth " + Mm(c.cell.bite_depth) + " (the first is " +
                        cell_case[m * B + b] + "); a table holds one");
     }
     cell_case[m * B + b] = c.name;
-    if (particle_size[m].empty()) particle_size[m] = c.scene.particle_size;
+    if (particle_size[m].empty()) particle_size[m] = c.cell.particle_size;
     for (size_t p = 0; p < P; ++p) {
       const size_t cell = (m * B + b) * P + p;
       const auto values = Resample(c, passes[p], rho, &rows[cell], &rho_end[cell]);

@@ -42,6 +42,8 @@
 
 namespace sim {
 
+class H5Output;  // sim/files/h5_output.h
+
 // The material ids of the lander simulator's CSV (column m): snow 1, ice 2, sand 3 (fixed);
 // another material gets 10, 11, ... in the order of its name among the table's other materials
 // (the table's /materials/id and the export say which).
@@ -60,8 +62,21 @@ struct WrenchTableOptions {
   RhoDefinition rho = RhoDefinition::kPath;
 };
 
+// The cell of the table a case fills, from its validated scene: bed.material, dig.bite_depth and
+// the particles' size ("spheres r 8 mm", "spheres r 4 mm to 8 mm", "clumps tetra4").
+struct TableCell {
+  std::string material;
+  double bite_depth = 0;  // [m]
+  std::string particle_size;
+};
+TableCell TableCellOf(const Scene& scene);
+// Writes TableCellOf(scene) as root attributes of a case's output (table_material,
+// table_bite_depth [m], table_particle_size), which BuildWrenchTable reads.
+void WriteTableCell(const Scene& scene, H5Output* out);
+
 // `scoopsim table build DIR -o TABLE.h5`: the table of every DIR/cases/*.h5 (a run's output with
-// a dig; material from the stored scene's bed.material, bite depth from dig.bite_depth). Throws
+// a dig; its cell from the attributes WriteTableCell wrote, or, in a case file made before them,
+// from its stored scene text: sim::ParseStoredDig). Throws
 // InputError for a folder without cases, two cases of one material and bite depth, or a file
 // that is not a dig's output. Returns a one-line summary.
 std::string BuildWrenchTable(const std::string& dir, const std::string& table_path,

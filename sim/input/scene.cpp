@@ -57,29 +57,8 @@ std::string Int(double v) {
 
 using yaml_input::LineOf;
 
-// One-line description of what a node holds, as written: "-1", "[2e-3, 1e-3]", "a map".
-std::string Describe(const YAML::Node& node) {
-  switch (node.Type()) {
-    case YAML::NodeType::Scalar:
-      return node.Scalar().empty() ? "an empty string" : node.Scalar();
-    case YAML::NodeType::Sequence: {
-      std::string out = "[";
-      for (size_t i = 0; i < node.size(); ++i) {
-        if (i > 0) out += ", ";
-        const YAML::Node item = node[i];
-        out += item.IsScalar() ? item.Scalar() : (item.IsMap() ? "{...}" : Describe(item));
-      }
-      return out + "]";
-    }
-    case YAML::NodeType::Map:
-      return "a map";
-    case YAML::NodeType::Null:
-      return "nothing";
-    case YAML::NodeType::Undefined:
-    default:
-      return "nothing (key missing)";
-  }
-}
+using yaml_input::Describe;
+using yaml_input::ResolveAgainst;
 
 std::string Join(const std::vector<std::string>& items, const char* sep = ", ") {
   std::string out;
@@ -272,11 +251,11 @@ class MapReader {
     v = CheckNumber(value, key, expected, ok, whole);
     if (yaml_input::LooksLikeRadians(v)) {
       const std::string unit = rate ? "deg/s" : "deg";
-      yaml_input::Warn(file_ + ":" + std::to_string(LineOf(value)) + ": " + key + ": " +
-                       value.Scalar() + " is taken as " + unit +
-                       "; if radians were meant, write '" + value.Scalar() + " " +
-                       (rate ? "rad/s" : "rad") + "' (or '" + value.Scalar() + " " + unit +
-                       "' to keep degrees)");
+      yaml_input::Warn(file_, LineOf(value),
+                       key + ": " + value.Scalar() + " is taken as " + unit +
+                           "; if radians were meant, write '" + value.Scalar() + " " +
+                           (rate ? "rad/s" : "rad") + "' (or '" + value.Scalar() + " " + unit +
+                           "' to keep degrees)");
     }
     return v;
   }
@@ -307,14 +286,6 @@ bool NonNegative(double v) { return v >= 0; }
 double MeanSphereVolume(double a, double b) {
   const double mean_r3 = b > a ? (b * b * b * b - a * a * a * a) / (4.0 * (b - a)) : a * a * a;
   return 4.0 / 3.0 * kPi * mean_r3;
-}
-
-// Path of a file named in `owner_file`, relative to its folder unless absolute. Not normalised,
-// so messages show the user's own spelling.
-std::string ResolveAgainst(const std::string& owner_file, const std::string& name) {
-  const std::filesystem::path p(name);
-  if (p.is_absolute()) return name;
-  return (std::filesystem::path(owner_file).parent_path() / p).string();
 }
 
 // The keys rolling_model and damping of a map, where present, into `out`.
@@ -1158,6 +1129,21 @@ int SceneLine(const Scene& scene, const std::string& key) {
   return line;
 }
 
+void RefuseArmScene(const Scene& scene, const std::string& command) {
+  if (!scene.arm.enabled) return;
+  // At the key's own line (SceneLine gives its value's: the line under it for a block map). The
+  // text was read as this scene: it parses.
+  int line = 1;
+  const YAML::Node root = ParseScene(scene.path, scene.yaml_text);
+  for (auto it = root.begin(); it != root.end(); ++it)
+    if (it->first.IsScalar() && it->first.Scalar() == "arm") line = LineOf(it->first);
+  const InputError error(scene.path, line, "arm",
+                         "a scene without an arm (" + command +
+                             " digs kinematically: the scoop follows the dig's path exactly)",
+                         "an arm", "run a scene with an arm with `scoopsim run`");
+  throw NamingSet(error, yaml_input::SetsOf(scene.yaml_text));
+}
+
 std::vector<std::string> BuiltinClumpNames() {
   std::vector<std::string> names;
   for (const dem::ClumpTemplate& t : dem::TetrahedronTemplates()) names.push_back(t.name);
@@ -1216,10 +1202,13 @@ InputError NamingSet(const InputError& error, const std::vector<std::string>& se
 
 Scene LoadSceneText(const std::string& path, const std::string& yaml_text) {
   yaml_input::TakeWarnings();  // none left from a load that failed
+  const std::vector<std::string> sets = yaml_input::SetsOf(yaml_text);
   try {
-    return ReadScene(path, yaml_text);
+    Scene scene = ReadScene(path, yaml_text);
+    for (std::string& w : scene.warnings) w = yaml_input::WarningNamingSet(w, path, sets);
+    return scene;
   } catch (const InputError& e) {
-    throw NamingSet(e, yaml_input::SetsOf(yaml_text));
+    throw NamingSet(e, sets);
   }
 }
 
@@ -1374,8 +1363,8 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
          "none");
   }
 
-  // The bed fits the box. The bed is poured in rounds (sim/loop/bed.h), each a loose lattice fill of
-  // pitch a = max(cbrt(mean sphere volume / fill_fraction), 2 rmax) above the bed so far
+  // The bed fits the box. The bed is poured in rounds (sim/loop/bed.h), each a loose lattice fill
+  // of pitch a = max(cbrt(mean sphere volume / fill_fraction), 2 rmax) above the bed so far
   // (dem/insertion.h), so the box must hold one lattice cell in every direction and the settled
   // bed, at a solid fraction of about 0.59, must lie below the box's top.
   // Clumps are poured as their bounding spheres at a solid fraction of clumps of fill_fraction
@@ -1475,15 +1464,15 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
 
   // Legal but almost surely wrong: warnings, not refusals.
   if (dem::Dot(scene.gravity, scene.gravity) == 0) {
-    scene.warnings.push_back(path + ":" + std::to_string(LineOf(root["gravity"])) +
-                             ": gravity: [0, 0, 0] m/s^2: nothing will settle and the bed will "
-                             "not resist the scoop (the paper's is [0, 0, -1.3])");
+    yaml_input::Warn(path, LineOf(root["gravity"]),
+                     "gravity: [0, 0, 0] m/s^2: nothing will settle and the bed will "
+                     "not resist the scoop (the paper's is [0, 0, -1.3])");
   }
   if (scene.dig.surface_given && scene.dig.surface > scene.box_max.z) {
-    scene.warnings.push_back(path + ":" + std::to_string(LineOf(root["dig"]["surface"])) +
-                             ": dig.surface: " + Num(scene.dig.surface) +
-                             " m is above the box's open top (box.max z = " + Num(scene.box_max.z) +
-                             " m): no bed stands there, the scoop will dig air");
+    yaml_input::Warn(path, LineOf(root["dig"]["surface"]),
+                     "dig.surface: " + Num(scene.dig.surface) +
+                         " m is above the box's open top (box.max z = " + Num(scene.box_max.z) +
+                         " m): no bed stands there, the scoop will dig air");
   }
   // The arm's step: below the explicit D term's bound; on a table, at most the lander's control
   // step; coupled, below the wrench lag's bound.
@@ -1510,10 +1499,9 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
            std::to_string(scene.arm.substeps), why);
     }
   }
-  // The reading's warnings (a bare angle that looks like radians) go before the checks' own; the
+  // The warnings, in the order found (a bare angle that looks like radians, then the checks'); the
   // CLI prints them (PrintWarnings in tools/main.cpp), once per command, not per load.
-  std::vector<std::string> read_warnings = yaml_input::TakeWarnings();
-  scene.warnings.insert(scene.warnings.begin(), read_warnings.begin(), read_warnings.end());
+  scene.warnings = yaml_input::TakeWarnings();
   return scene;
 }
 
@@ -1541,6 +1529,38 @@ StoredScene ParseStoredScene(const std::string& yaml_text, const std::string& na
     stored.has_gravity = true;
   }
   if (root["render"]) stored.render = ParseRender(name, root["render"]);
+  return stored;
+}
+
+StoredDig ParseStoredDig(const std::string& yaml_text, const std::string& name) {
+  const YAML::Node root = ParseScene(name, yaml_text);
+  if (!root.IsMap() || !root["bed"] || !root["dig"])
+    Fail(name, 1, "(top level)", "a scene with a bed and a dig", Describe(root));
+  // Only the keys read here are checked; the others may come from another version.
+  const auto only = [&](const char* map, std::initializer_list<const char*> keys) {
+    YAML::Node subset(YAML::NodeType::Map);
+    for (const char* key : keys)
+      if (root[map].IsMap() && root[map][key]) subset[key] = root[map][key];
+    return MapReader(name, root[map].IsMap() ? subset : root[map], map, keys);
+  };
+  StoredDig stored;
+  const MapReader bed = only("bed", {"material", "radius", "clump"});
+  stored.material = bed.String("material", "a material name");
+  if (bed.Has("clump")) {
+    stored.clump = bed.String("clump", "a clump template name");
+  } else {
+    const std::string expected = "a number > 0 or a range [rmin, rmax] (m)";
+    const YAML::Node r = bed.Need("radius", expected);
+    if (r.IsSequence() && r.size() == 2) {
+      stored.radius_min = bed.CheckNumber(r[0], "bed.radius", expected, Positive, &r);
+      stored.radius_max = bed.CheckNumber(r[1], "bed.radius", expected, Positive, &r);
+    } else {
+      stored.radius_min = stored.radius_max = bed.CheckNumber(r, "bed.radius", expected, Positive);
+    }
+  }
+  const MapReader dig = only("dig", {"bite_depth"});
+  stored.bite_depth =
+      dig.Number("bite_depth", DigSpec{}.bite_depth, "a number >= 0 (m)", NonNegative);
   return stored;
 }
 

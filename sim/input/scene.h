@@ -218,6 +218,11 @@ InputError NamingSet(const InputError& error, const std::vector<std::string>& se
 // (sim/loop/preflight.h).
 int SceneLine(const Scene& scene, const std::string& key);
 
+// Refuses a scene with `arm:` for a command that digs kinematically (the scoop follows the dig's
+// path exactly: sweeps, the shape, particle-size and Balovnev studies): an InputError at the
+// scene's `arm` line naming `command`; an error about an `arm` a --set wrote names the --set.
+void RefuseArmScene(const Scene& scene, const std::string& command);
+
 // Refuses (InputError at bed.count) a bed that would not fit the box once settled: bed.count
 // spheres or clumps at a solid fraction of ~0.59 must lie below the box's top. LoadScene checks
 // it for a bed still to be poured; Preflight for `scoopsim bed` of a scene that names a bed.file
@@ -248,6 +253,18 @@ struct StoredScene {
 // it; other keys are not read. `name` stands for the file in messages ("out.h5:scene_yaml").
 // Throws InputError like LoadScene.
 StoredScene ParseStoredScene(const std::string& yaml_text, const std::string& name);
+
+// What the scene text stored in a dig's output made before 2026-12-06 says about the wrench table's
+// cell it fills (sim/files/wrench_table.h; later outputs of a sweep carry the validated Scene's
+// values as attributes). Read with LoadScene's checks and defaults of these keys.
+struct StoredDig {
+  std::string material;                   // bed.material
+  double radius_min = 0, radius_max = 0;  // [m] bed.radius (0 with bed.clump)
+  std::string clump;                      // bed.clump, "" = spheres
+  double bite_depth = 0;                  // [m] dig.bite_depth, DigSpec's default when not given
+};
+// Throws InputError (named `name`) for a text without bed.material or a dig, or with a bad value.
+StoredDig ParseStoredDig(const std::string& yaml_text, const std::string& name);
 
 // Loads a materials file into `table` (materials and their pair interactions). Throws InputError.
 void LoadMaterials(const std::string& path, dem::MaterialTable* table);

@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <vector>
 
@@ -13,6 +14,37 @@ namespace sim::yaml_input {
 int LineOf(const YAML::Node& node) {
   const int line = node.Mark().line;
   return line >= 0 ? line + 1 : 1;
+}
+
+std::string Describe(const YAML::Node& node) {
+  // A key looked up in a const map where it is not: an invalid node, whose Type() throws.
+  if (!node.IsDefined()) return "nothing (key missing)";
+  switch (node.Type()) {
+    case YAML::NodeType::Scalar:
+      return node.Scalar().empty() ? "an empty string" : node.Scalar();
+    case YAML::NodeType::Sequence: {
+      std::string out = "[";
+      for (size_t i = 0; i < node.size(); ++i) {
+        if (i > 0) out += ", ";
+        const YAML::Node item = node[i];
+        out += item.IsScalar() ? item.Scalar() : (item.IsMap() ? "{...}" : Describe(item));
+      }
+      return out + "]";
+    }
+    case YAML::NodeType::Map:
+      return "a map";
+    case YAML::NodeType::Null:
+      return "nothing";
+    case YAML::NodeType::Undefined:
+    default:
+      return "nothing (key missing)";
+  }
+}
+
+std::string ResolveAgainst(const std::string& owner_file, const std::string& name) {
+  const std::filesystem::path p(name);
+  if (p.is_absolute()) return name;
+  return (std::filesystem::path(owner_file).parent_path() / p).string();
 }
 
 YAML::Node ParseDocument(const std::string& file, const std::string& text) {
@@ -85,7 +117,9 @@ namespace {
 thread_local std::vector<std::string> warnings;
 }  // namespace
 
-void Warn(const std::string& line) { warnings.push_back(line); }
+void Warn(const std::string& file, int line, const std::string& text) {
+  warnings.push_back(file + ":" + std::to_string(line) + ": " + text);
+}
 
 std::vector<std::string> TakeWarnings() {
   std::vector<std::string> out;
@@ -165,6 +199,7 @@ void ApplySets(YAML::Node* root, const std::vector<std::string>& sets) {
         if (index >= node.size()) {
           BadSet(set, "an index below " + std::to_string(node.size()) + " at '" + key + "'");
         }
+        if (last && value.IsNull()) BadSet(set, "a value (a list entry cannot be removed)");
         if (last) {
           node[index] = value;
         } else {
@@ -176,7 +211,9 @@ void ApplySets(YAML::Node* root, const std::vector<std::string>& sets) {
       // (A lookup on a const node: a non-const one would insert the key, undefined.)
       const YAML::Node found = static_cast<const YAML::Node&>(node)[key];
       const bool present = found.IsDefined();
-      if (last) {
+      if (last && value.IsNull()) {
+        node.remove(key);
+      } else if (last) {
         if (present) {
           node[key] = value;
         } else {
@@ -199,6 +236,16 @@ void ApplySets(YAML::Node* root, const std::vector<std::string>& sets) {
 std::string SetAt(int line, const std::vector<std::string>& sets) {
   const int i = line - kSetLine;
   return i >= 0 && i < static_cast<int>(sets.size()) ? sets[i] : std::string();
+}
+
+std::string WarningNamingSet(const std::string& warning, const std::string& file,
+                             const std::vector<std::string>& sets) {
+  for (size_t i = 0; i < sets.size(); ++i) {
+    const std::string at = file + ":" + std::to_string(kSetLine + static_cast<int>(i)) + ": ";
+    if (warning.compare(0, at.size(), at) == 0)
+      return "--set " + sets[i] + ": " + warning.substr(at.size());
+  }
+  return warning;
 }
 
 }  // namespace sim::yaml_input

@@ -13,6 +13,14 @@ namespace sim::yaml_input {
 // 1-based line of a node, or 1 for a node without a mark (an empty document).
 int LineOf(const YAML::Node& node);
 
+// One-line description of what a node holds, as written, for "got ..." in messages: "-1",
+// "[2e-3, 1e-3]", "a map", "nothing".
+std::string Describe(const YAML::Node& node);
+
+// Path of a file named in `owner_file`, relative to its folder unless absolute. Not normalised,
+// so messages show the user's own spelling.
+std::string ResolveAgainst(const std::string& owner_file, const std::string& name);
+
 // The one document of `text` (a null node for an empty text). A syntax error, or a second document
 // that holds anything ("---" then more keys, which a plain YAML::Load would drop silently), is an
 // InputError naming `file` and the line.
@@ -31,9 +39,10 @@ bool ParseAngleWithUnit(const std::string& text, bool rate, double* degrees);
 // integer and |v| <= 2 pi (a radian value from ROS is rarely whole, a degree value in a scene
 // nearly always is; writing the unit silences it).
 bool LooksLikeRadians(double v);
-// Warnings of the input being read on this thread, one line each ("FILE:LINE: KEY: ..."):
-// Warn adds one, TakeWarnings returns them and starts over.
-void Warn(const std::string& line);
+// Warnings of the input being read on this thread, one line each ("FILE:LINE: KEY: ..."): the one
+// route of a scene's warnings (sim::Scene::warnings takes them at the end of its load). Warn adds
+// one about `line` of `file`, TakeWarnings returns them and starts over.
+void Warn(const std::string& file, int line, const std::string& text);
 std::vector<std::string> TakeWarnings();
 
 // Scene keys set from the command line (`--set KEY=VALUE`, repeatable). They travel with the
@@ -52,9 +61,14 @@ std::string TextWithSets(const std::string& text, const std::vector<std::string>
 std::vector<std::string> SetsOf(const std::string& text);
 // Writes each override into `root` (a map, or null for an empty document): KEY is a dotted path of
 // map keys (or list indices), created when missing; VALUE is parsed as YAML. A malformed KEY=VALUE
-// is an InputError naming --set.
+// is an InputError naming --set. A null VALUE (~) removes a map's key (a list entry cannot be
+// removed).
 void ApplySets(YAML::Node* root, const std::vector<std::string>& sets);
 // The override a line from ApplySets belongs to ("" for a line of the file itself).
 std::string SetAt(int line, const std::vector<std::string>& sets);
+// A warning of Warn about `file` reworded to name the override it is about ("--set KEY=VALUE:
+// KEY: ...") when its line is one of `sets`'; else `warning`.
+std::string WarningNamingSet(const std::string& warning, const std::string& file,
+                             const std::vector<std::string>& sets);
 
 }  // namespace sim::yaml_input

@@ -71,7 +71,7 @@ int RunBalovnevStudy(const Scene& scene_in, const BalovnevStudyOptions& options)
   InstallStopHandlers();
   const std::string who = scene_in.path + ": study balovnev";
   if (!scene_in.dig.enabled) throw InputError(who + ": the scene needs a dig");
-  if (scene_in.arm.enabled) throw InputError(who + ": a scene with an arm is not supported");
+  RefuseArmScene(scene_in, "study balovnev");
   // The model's inputs are checked before any work (a placeholder unit weight: the bed's comes
   // later).
   {

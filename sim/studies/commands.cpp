@@ -192,6 +192,7 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options) {
   namespace fs = std::filesystem;
   InstallStopHandlers();
   if (!scene.dig.enabled) throw InputError(scene.path + ": study shape: the scene needs a dig");
+  RefuseArmScene(scene, "study shape");
   std::vector<std::string> names =
       options.templates.empty() ? BuiltinClumpNames() : options.templates;
   std::vector<dem::ClumpTemplate> templates;

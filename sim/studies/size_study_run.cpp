@@ -71,6 +71,7 @@ std::string Number(double v) {
 
 int RunSizeStudy(const std::string& scene_path, const SizeStudyOptions& options) {
   const Scene scene = LoadScene(scene_path);
+  RefuseArmScene(scene, "study particle-size");
   const std::vector<double> sizes = options.sizes_mm.empty() ? StudySizesMm() : options.sizes_mm;
   if (!(options.smooth_s >= 0) || !std::isfinite(options.smooth_s)) {
     throw InputError("study particle-size", 0, "--smooth-s", "a window >= 0 [s]",

@@ -1,5 +1,5 @@
-// Sweeps (sim/studies/sweep.h): the sweep file, the cases' scenes, running and resuming one case, the
-// status records, and the plain (one after another) runner. The MPI runner is sweep_mpi.cpp.
+// Sweeps (sim/studies/sweep.h): the sweep file, the cases' scenes, running and resuming one case,
+// the status records, and the plain (one after another) runner. The MPI runner is sweep_mpi.cpp.
 #include "sim/studies/sweep.h"
 
 #include <fcntl.h>
@@ -23,16 +23,16 @@
 
 #include "sim/files/bed_io.h"
 #include "sim/files/checkpoint.h"
-#include "sim/input/exit_status.h"
 #include "sim/files/h5_output.h"
 #include "sim/files/internal_h5.h"
-#include "sim/studies/internal_sweep.h"
+#include "sim/files/wrench_table.h"
+#include "sim/input/exit_status.h"
+#include "sim/input/trajectory.h"
+#include "sim/input/yaml_input.h"
 #include "sim/loop/preflight.h"
 #include "sim/loop/progress.h"
-#include "sim/input/trajectory.h"
 #include "sim/loop/world.h"
-#include "sim/files/wrench_table.h"
-#include "sim/input/yaml_input.h"
+#include "sim/studies/internal_sweep.h"
 
 namespace sim {
 namespace fs = std::filesystem;
@@ -42,10 +42,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-int LineOf(const YAML::Node& node) {
-  const int line = node.Mark().line;
-  return line >= 0 ? line + 1 : 0;
-}
+using yaml_input::Describe;
+using yaml_input::LineOf;
+using yaml_input::ResolveAgainst;
 
 std::string YamlText(const YAML::Node& node) {
   if (node.IsScalar()) return node.Scalar();
@@ -62,13 +61,6 @@ constexpr int kMaxCases = 100000;
                        const std::string& expected, const std::string& got,
                        const std::string& note = "") {
   throw InputError(file, LineOf(node), key, expected, got, note);
-}
-
-std::string Describe(const YAML::Node& node) {
-  if (!node.IsDefined() || node.IsNull()) return "nothing";
-  if (node.IsSequence()) return node.size() == 0 ? "an empty list" : "a list";
-  if (node.IsMap()) return node.size() == 0 ? "an empty map" : "a map";
-  return "'" + node.Scalar() + "'";
 }
 
 bool ValidName(const std::string& name) {
@@ -117,52 +109,6 @@ bool ParseKeyPath(const std::string& path, std::vector<KeyStep>* steps) {
     steps->push_back(s);
   }
   return !steps->empty() && path.back() != '.';
-}
-
-// Sets (or, for null, removes) the value at steps[i..] under `node`. Recursion, not a loop: a
-// yaml-cpp Node variable assigned another node would alias the two in the tree. Returns false
-// with *why when the path runs into something that is not a map (or a list, for "[i]").
-bool SetPath(YAML::Node node, const std::vector<KeyStep>& steps, size_t i, const YAML::Node& value,
-             std::string* why) {
-  const KeyStep& s = steps[i];
-  const bool last = i + 1 == steps.size();
-  if (!node.IsMap()) {
-    *why = "'" + s.key + "' under a value that is not a map";
-    return false;
-  }
-  if (last && s.index < 0) {
-    if (value.IsNull()) {
-      node.remove(s.key);
-    } else {
-      node[s.key] = YAML::Clone(value);
-    }
-    return true;
-  }
-  if (!node[s.key].IsDefined()) {
-    if (s.index >= 0) {
-      *why = "'" + s.key + "' to be a list in the base scene";
-      return false;
-    }
-    node[s.key] = YAML::Node(YAML::NodeType::Map);
-  }
-  YAML::Node child = node[s.key];
-  if (s.index >= 0) {
-    if (!child.IsSequence() || static_cast<size_t>(s.index) >= child.size()) {
-      *why = "'" + s.key + "' to be a list of more than " + std::to_string(s.index) +
-             " entries in the base scene";
-      return false;
-    }
-    if (last) {
-      if (value.IsNull()) {
-        *why = "a value (a list entry cannot be removed)";
-        return false;
-      }
-      child[s.index] = YAML::Clone(value);
-      return true;
-    }
-    return SetPath(child[s.index], steps, i + 1, value, why);
-  }
-  return SetPath(child, steps, i + 1, value, why);
 }
 
 // One value of a variable.
@@ -228,12 +174,6 @@ Variable ReadVariable(const std::string& file, const std::string& where, const Y
   return v;
 }
 
-std::string ResolveAgainst(const std::string& owner_file, const std::string& name) {
-  const fs::path p(name);
-  if (p.is_absolute()) return name;
-  return (fs::path(owner_file).parent_path() / p).string();
-}
-
 // The cost a case is ordered by: its particles times its planned simulated time (the passes'
 // paths, without the descents, which depend on the bed), divided by its time step: particle-
 // steps, so that a material of a smaller step counts as the longer run it is.
@@ -246,8 +186,26 @@ double Estimate(const Scene& scene) {
          scene.time_step;
 }
 
-// Loads `draft`'s scene: the base scene's tree with its settings applied, loaded whole. A
-// loader error about a varied key is reported at that value's line in the sweep file.
+// A setting as the command line's override (`--set KEY=VALUE`, yaml_input.h): the key path with
+// "[i]" as ".i", the value on one line (YAML's flow form; a scalar as written).
+std::string AsSet(const std::string& key, const YAML::Node& value) {
+  std::vector<KeyStep> steps;
+  ParseKeyPath(key, &steps);
+  std::string path;
+  for (const KeyStep& s : steps) {
+    path += (path.empty() ? "" : ".") + s.key;
+    if (s.index >= 0) path += "." + std::to_string(s.index);
+  }
+  if (value.IsNull()) return path + "=~";  // removes the key
+  YAML::Emitter e;                         // quotes a scalar that would not read back as itself
+  e << YAML::Flow << value;
+  return path + "=" + e.c_str();
+}
+
+// Loads `draft`'s scene: the base scene's text with its settings as `--set` overrides (the
+// mechanism of the command line's --set: written into the document before anything is checked),
+// loaded whole. A loader error about a varied key is reported at that value's line in the sweep
+// file.
 SweepCase MakeCase(const std::string& file, const std::string& default_base, const Draft& draft,
                    std::map<std::string, std::string>* base_texts) {
   SweepCase c;
@@ -264,54 +222,57 @@ SweepCase MakeCase(const std::string& file, const std::string& default_base, con
   // The base scene, validated on its own first so that its errors point at its own lines.
   if (base_texts->count(base) == 0) {
     try {
-      (*base_texts)[base] = LoadScene(base).yaml_text;
+      const Scene scene = LoadScene(base);
+      RefuseArmScene(scene, "a sweep");
+      (*base_texts)[base] = scene.yaml_text;
     } catch (const InputError& e) {
       throw InputError(std::string(e.what()) + " (base scene of the sweep " + file + ")");
     }
   }
-  YAML::Node root = YAML::Load(base_texts->at(base));
-  std::string header = "# sweep " + file + ", case " + c.name + " of the base scene " + base + ":";
-  for (size_t k = 0; k < draft.settings.size(); ++k) {
-    const auto& [key, choice] = draft.settings[k];
-    header += " " + key + " = " + YamlText(choice.value) + ";";
-    if (key == "scene") continue;
-    std::vector<KeyStep> steps;
-    ParseKeyPath(key, &steps);
-    std::string why;
-    if (!SetPath(root, steps, 0, choice.value, &why)) {
-      throw InputError(file, draft.key_lines[k], key,
-                       "a key path into the maps of the base scene " + base,
-                       "a path that needs " + why);
-    }
+  // The case's text: the base's, a comment naming the case, its settings as --set lines. Its
+  // lines are the base file's; the overrides' nodes carry lines from yaml_input::kSetLine on.
+  std::string text = base_texts->at(base);
+  if (!text.empty() && text.back() != '\n') text += '\n';
+  text += "# sweep " + file + ", case " + c.name + " of the base scene " + base + "\n";
+  const size_t first_set = yaml_input::SetsOf(text).size();  // the base's own, if any
+  std::vector<std::string> sets;  // sets[k]: draft.settings[k]'s ("" for the key `scene`)
+  std::vector<std::string> given;
+  for (const auto& [key, choice] : draft.settings) {
+    sets.push_back(key == "scene" ? "" : AsSet(key, choice.value));
+    if (key != "scene") given.push_back(sets.back());
   }
-  YAML::Emitter out;
-  out << root;
-  const std::string text = header + "\n" + out.c_str() + "\n";
+  text = yaml_input::TextWithSets(text, given);
   try {
-    // Named "<base>#<case>" in messages: their lines are those of the case's text (stored in its
-    // output), not the base file's; files named in it are found beside the base all the same.
-    c.scene = LoadSceneText(base + "#" + c.name, text);
+    c.scene = LoadSceneText(base, text);
     Preflight(&c.scene, Work::kRun);
-    c.scene.path = base;
+    RefuseArmScene(c.scene, "a sweep");
   } catch (const InputError& e) {
-    // About a key the case sets (or under it, or above it: an unknown key is reported at it):
-    // reported at that value in the sweep file.
+    // The setting it is about: the override at its line (an error found after the load), the
+    // override it names (LoadSceneText's NamingSet), else one whose key is the error's, under
+    // it or above it (an unknown key is reported at it).
+    const auto under = [](const std::string& a, const std::string& b) {
+      return a.size() > b.size() && a.compare(0, b.size(), b) == 0 &&
+             (a[b.size()] == '.' || a[b.size()] == '[');
+    };
+    std::vector<std::string> all(first_set, "");
+    all.insert(all.end(), given.begin(), given.end());
+    const std::string at_line = yaml_input::SetAt(e.line(), all);
     for (size_t k = 0; k < draft.settings.size(); ++k) {
       const std::string& key = draft.settings[k].first;
       const std::string& got = e.key();
-      const auto under = [](const std::string& a, const std::string& b) {
-        return a.size() > b.size() && a.compare(0, b.size(), b) == 0 &&
-               (a[b.size()] == '.' || a[b.size()] == '[');
-      };
-      if (!got.empty() && (got == key || under(got, key) || under(key, got))) {
+      const bool named =
+          !sets[k].empty() && (at_line == sets[k] || e.file() == "--set " + sets[k] ||
+                               (e.file() == "--set" && e.got() == "'" + sets[k] + "'"));
+      if (named || (!got.empty() && (got == key || under(got, key) || under(key, got)))) {
         throw InputError(
-            file, LineOf(draft.settings[k].second.value), got, e.expected(), e.got(),
-            "case " + c.name + " of " + base + (e.note().empty() ? "" : "; " + e.note()));
+            file, LineOf(draft.settings[k].second.value), got.empty() ? key : got, e.expected(),
+            e.got(), "case " + c.name + " of " + base + (e.note().empty() ? "" : "; " + e.note()));
       }
     }
     throw InputError(file, draft.name_line, "case " + c.name,
                      "settings that make a valid scene of " + base, e.what());
   }
+  c.scene.path = base;
   if (!c.scene.dig.enabled) {
     throw InputError(file, draft.name_line, "case " + c.name,
                      "a scene with a dig (a sweep's table is made of the scoop's wrench)",
@@ -729,6 +690,7 @@ void MergeParts(const SweepCase& c, const CasePaths& paths, double bed_cpu_s) {
     out.SetAttribute("sweep_index", static_cast<double>(c.index));
     out.SetAttribute("sweep_cpu_s", cpu_s);
     out.SetAttribute("sweep_bed_cpu_s", bed_cpu_s);
+    WriteTableCell(c.scene, &out);  // the table's cell, from the validated scene
     out.Close();
   }
   PlaceOutput(tmp.string(), paths.h5.string());  // under the output lock (sim/files/h5_output.h)

@@ -18,18 +18,24 @@
 // whole subtree, as in `bed: {...}`), and null (~) removes the key. A case's name is its values'
 // labels joined by '_' (a map entry's label, else the value's text), unless given.
 //
-// A case is applied by editing the YAML tree of the base scene and loading the result with the
-// normal scene loader (sim::LoadSceneText), so every case is validated whole at load, and its
-// edited text is the scene text stored in its output. Errors name the sweep file, the line of
-// the value, the key and what was expected (sim::InputError; the CLI exits 2).
+// A case is the base scene with its settings as the command line's overrides (`--set KEY=VALUE`,
+// sim/input/yaml_input.h: "[i]" written ".i"): its text is the base file's, a comment naming the
+// case, then a `# scoopsim --set KEY=VALUE` line per setting, loaded with the normal scene loader
+// (sim::LoadSceneText), so every case is validated whole at load, and that text is the scene
+// text stored in its output. Errors name the sweep file, the line of the value, the key and what
+// was expected (sim::InputError; the CLI exits 2). A scene with `arm:` (the base, or a case's) is
+// refused: a sweep digs kinematically (sim::RefuseArmScene).
 //
 // The output folder DIR:
-//   DIR/cases/<name>.h5        the case's run output, as `scoopsim run` writes it (sim/files/h5_output.h)
+//   DIR/cases/<name>.h5        the case's run output, as `scoopsim run` writes it
+//   (sim/files/h5_output.h)
 //                              plus root attributes sweep_case, sweep_index and /sweep/pass_wall_s,
 //                              /sweep/pass_cpu_s (one row per pass, wall and CPU seconds),
 //                              root attributes sweep_cpu_s (the passes' CPU seconds, all
-//                              threads) and sweep_bed_cpu_s (the pour's, 0 for a saved bed);
-//                              written when the case's last pass is done
+//                              threads) and sweep_bed_cpu_s (the pour's, 0 for a saved bed),
+//                              and the table cell it fills, from its validated scene
+//                              (table_material, table_bite_depth, table_particle_size:
+//                              sim::WriteTableCell); written when the case's last pass is done
 //   DIR/cases/<name>.status    its status record (text, "key: value" lines; written to a
 //                              temporary file and renamed): state (running, done, failed,
 //                              stopped), passes, passes_done, surface, clear_z, scene_hash, ...
@@ -40,10 +46,11 @@
 //                              (SweepOptions::checkpoint_every) and when stopped by a signal,
 //                              pour.h5 (the pour so far: a saved bed with the whole state,
 //                              sim/files/bed_io.h) and pass_<k>.restart.h5 (the running pass's
-//                              checkpoint, sim/files/checkpoint.h), from which a resumed case goes on
-//                              bit for bit
+//                              checkpoint, sim/files/checkpoint.h), from which a resumed case goes
+//                              on bit for bit
 //   DIR/cases/<name>.lock      flock'ed while a process runs the case (two never run one case)
-//   DIR/table.h5               the wrench table (sim/files/wrench_table.h), built when every case is done
+//   DIR/table.h5               the wrench table (sim/files/wrench_table.h), built when every case
+//   is done
 // Test hook: SCOOPSIM_SWEEP_KILL=<case>:<pass>:<seconds> SIGKILLs the process that many simulated
 // seconds into that pass of that case (pass 0: the pour, just after a keep); with :TERM appended
 // it raises SIGTERM instead, just after a keep (pour or pass; a pass keeps only with
@@ -76,7 +83,7 @@ struct SweepCase {
   int index = 0;     // 0-based, in the sweep's order (`--case I`)
   std::string name;  // [A-Za-z0-9._-]+, unique in the sweep
   std::vector<SweepSetting> settings;
-  Scene scene;          // validated; yaml_text is the edited base scene
+  Scene scene;          // validated; yaml_text is the base scene's with the settings as --set
   double estimate = 0;  // cost: particles x planned simulated time / time step [-]
 };
 

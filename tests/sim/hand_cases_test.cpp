@@ -134,6 +134,10 @@ void MakeInputs(const fs::path& dir) {
   WriteText(dir / "sweep_key.yaml", "scene: " + src +
                                         "/scenes/sweeps/tiny_scene.yaml\ngrid:\n"
                                         "  dig.bite_dept: [0.005]\n");
+  // A sweep of a scene with an arm.
+  WriteText(dir / "sweep_arm.yaml", "scene: " + src +
+                                        "/scenes/arm/nominal_snow.yaml\ngrid:\n"
+                                        "  dig.bite_depth: [0.01]\n");
   // A sweep output folder whose cases/ is a file: nothing can be written there.
   fs::create_directories(dir / "blocked_out");
   WriteText(dir / "blocked_out" / "cases", "");
@@ -280,6 +284,20 @@ const std::vector<Row>& Rows() {
        "--case: expected a case index in 0..3"},
       {"table export-csv {d}/no_table.h5 -o {d}/a_folder", 2,
        "expected a file to write, got a folder"},
+      // Were run with a kinematic scoop, the arm ignored (balovnev: "a scene with an arm is not
+      // supported", without file, line or key). The `arm:` key is line 36 of nominal_snow.yaml.
+      {"sweep {d}/sweep_arm.yaml --list -o {d}/sweep_arm_out", 2,
+       "scenes/arm/nominal_snow.yaml:36: arm: expected a scene without an arm (a sweep digs "
+       "kinematically"},
+      {"study shape {s}/scenes/arm/nominal_snow.yaml -o {d}/shape_arm.h5", 2,
+       "scenes/arm/nominal_snow.yaml:36: arm: expected a scene without an arm (study shape digs "
+       "kinematically"},
+      {"study balovnev {s}/scenes/arm/nominal_snow.yaml -o {d}/balovnev_arm.h5", 2,
+       "scenes/arm/nominal_snow.yaml:36: arm: expected a scene without an arm (study balovnev "
+       "digs kinematically"},
+      {"study particle-size {s}/scenes/arm/nominal_snow.yaml -o {d}/size_arm --list", 2,
+       "scenes/arm/nominal_snow.yaml:36: arm: expected a scene without an arm (study "
+       "particle-size digs kinematically"},
   };
   return rows;
 }

@@ -87,6 +87,18 @@ TEST(SceneUnitsTest, BareAngleThatLooksLikeRadiansWarns) {
       << r.warnings[0];
 }
 
+// A warning about a value a --set gave names the --set, as an error about it does (it named
+// "FILE:100001:", the line the second override's node carries, before).
+TEST(SceneUnitsTest, WarningAboutASetValueNamesTheSet) {
+  const std::string path = Write("set_rad.yaml", Scene("90", "0", "30", "45"));
+  const sim::Scene s =
+      sim::LoadScene(path, {"dig.trajectory.heading=3", "dig.trajectory.initial_pitch=1.57"});
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0],
+            "--set dig.trajectory.initial_pitch=1.57: dig.trajectory.initial_pitch: 1.57 is taken "
+            "as deg; if radians were meant, write '1.57 rad' (or '1.57 deg' to keep degrees)");
+}
+
 // A unit other than deg or rad (deg/s, rad/s for a rate), or a value outside the key's range once
 // converted, is one InputError at the key's line.
 TEST(SceneUnitsTest, UnknownUnitIsRefusedWithOneLine) {

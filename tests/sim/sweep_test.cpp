@@ -1,5 +1,5 @@
-// Sweeps (sim/studies/sweep.cpp): the sweep file (cases from a grid and a list, errors at load with the
-// line and key), status records, and end to end on scenes/sweeps/tiny.yaml (four cases, two
+// Sweeps (sim/studies/sweep.cpp): the sweep file (cases from a grid and a list, errors at load with
+// the line and key), status records, and end to end on scenes/sweeps/tiny.yaml (four cases, two
 // passes each): a plain run, a two-rank `mpirun` run, `--case I` and runs SIGKILLed mid-case
 // (in a pass without checkpoints, in a pass with them, in the pour) then resumed all give the
 // same table and case rows, bit for bit.
@@ -99,6 +99,38 @@ cases:
       sim::LoadSceneText(sweep.cases[3].scene.path, sweep.cases[3].scene.yaml_text);
   EXPECT_EQ(again.bed.material, "ice");
   EXPECT_EQ(again.dig.bite_depth, 0.01);
+  // ... made as the command line's --set makes a scene: the base file's text, whole, then the
+  // case's settings as `# scoopsim --set KEY=VALUE` lines ("[i]" as ".i").
+  const std::string base = ReadText(kSourceDir + std::string("/scenes/sweeps/tiny_scene.yaml"));
+  EXPECT_EQ(sweep.cases[3].scene.yaml_text.compare(0, base.size(), base), 0);
+  EXPECT_EQ(sim::LoadScene(sweep.cases[3].scene.path, {"bed.material=ice", "dig.bite_depth=0.01"})
+                .dig.bite_depth,
+            0.01);
+  const std::string text = sweep.cases[3].scene.yaml_text;
+  EXPECT_NE(
+      text.find("\n# scoopsim --set bed.material=ice\n# scoopsim --set dig.bite_depth=0.01\n"),
+      std::string::npos)
+      << text;
+}
+
+TEST(SweepFileTest, ListIndexAndRemovalAreOverrides) {
+  // tiny_scene.yaml: dig.trajectory.start [0.13, 0.08], dig.interval 2.0e-3.
+  const sim::Sweep sweep = sim::LoadSweep(WriteSweep("index.yaml", R"(cases:
+  - name: far
+    set:
+      dig.trajectory.start[1]: 0.09
+      dig.interval: ~
+)"));
+  ASSERT_EQ(sweep.cases.size(), 1u);
+  const sim::Scene& scene = sweep.cases[0].scene;
+  const sim::Scene base = sim::LoadScene(scene.path);
+  EXPECT_EQ(base.dig.interval, 2.0e-3);
+  EXPECT_EQ(scene.dig.interval, sim::DigSpec{}.interval);  // the key removed: its default
+  EXPECT_NE(scene.yaml_text.find("\n# scoopsim --set dig.trajectory.start.1=0.09\n"),
+            std::string::npos)
+      << scene.yaml_text;
+  EXPECT_EQ(base.dig.trajectory.pivot_start.y, 0.08);
+  EXPECT_EQ(scene.dig.trajectory.pivot_start.y, 0.09);  // dig.trajectory.start: [x, y]
 }
 
 TEST(SweepFileTest, UnknownSceneKeyPathFailsAtItsLine) {
@@ -116,6 +148,16 @@ TEST(SweepFileTest, UnknownSceneKeyPathFailsAtItsLine) {
   const sim::InputError value = LoadError("grid:\n  dig.bite_depth:\n    - 0.01\n    - -2\n");
   EXPECT_EQ(value.line(), 5) << value.what();
   EXPECT_EQ(value.key(), "dig.bite_depth");
+}
+
+// A sweep digs kinematically: a case that gives the scene an arm is refused at its setting's
+// line, key `arm` (a base scene with one, at its own line: hand_cases_test.cpp).
+TEST(SweepFileTest, CaseWithAnArmIsRefused) {
+  const sim::InputError e = LoadError(
+      "cases:\n  - name: witharm\n    set: {arm: {urdf: ../../assets/lander_arm.urdf}}\n");
+  EXPECT_EQ(e.line(), 4) << e.what();
+  EXPECT_EQ(e.key(), "arm") << e.what();
+  EXPECT_NE(e.expected().find("a sweep digs kinematically"), std::string::npos) << e.what();
 }
 
 TEST(SweepFileTest, EmptyGridFails) {
@@ -405,11 +447,15 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
   const std::string text = ReadText(log);
   EXPECT_NE(text.find("[3/4] ice_b10 started"), std::string::npos) << text;
   EXPECT_NE(text.find("of 4 finished, ETA"), std::string::npos) << text;
-  // A case's file is a run's output with two passes, its scene the edited base scene.
+  // A case's file is a run's output with two passes, its scene the base scene with the case's
+  // settings as --set lines, which whatever reads the text again applies.
   const sim::SavedRun run((plain / "cases" / "ice_b5.h5").string());
   const std::string scene = run.SceneYaml();
-  EXPECT_NE(scene.find("material: ice"), std::string::npos) << scene;
-  EXPECT_NE(scene.find("bite_depth: 0.005"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("\n# scoopsim --set bed.material=ice\n"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("\n# scoopsim --set dig.bite_depth=0.005\n"), std::string::npos) << scene;
+  const sim::StoredDig stored = sim::ParseStoredDig(scene, "ice_b5.h5");
+  EXPECT_EQ(stored.material, "ice");
+  EXPECT_EQ(stored.bite_depth, 0.005);
   const sim::ScoopSeries scoop = run.Scoop();
   ASSERT_FALSE(scoop.empty());
   EXPECT_EQ(scoop.pass.front(), 1);

@@ -41,13 +41,17 @@ double Wrench(int material, double bite, int pass, int q, double rho) {
 // contact (contacts 0, junk wrench), the contact rows rho = 0, kRowStep, ..., kRhoEnd, then rows
 // where the scoop moves back along the trench (rho falling, junk wrench) that the running
 // maximum leaves out.
+// `sets` are appended to its scene text as the command line's overrides; with `cell`, the
+// attributes a sweep writes from the case's validated scene (sim::WriteTableCell).
 void WriteCase(const fs::path& dir, const std::string& name, const std::string& material,
-               double bite) {
+               double bite, const std::string& sets = "", const sim::Scene* cell = nullptr) {
   const int m = material == "snow" ? 0 : 1;
   const std::string scene =
       "materials: materials.yaml\nbed: {material: " + material +
-      ", radius: 0.008, count: 10}\ndig: {bite_depth: " + std::to_string(bite) + ", passes: 2}\n";
+      ", radius: 0.008, count: 10}\ndig: {bite_depth: " + std::to_string(bite) + ", passes: 2}\n" +
+      sets;
   sim::H5Output out((dir / "cases" / (name + ".h5")).string(), scene, "test");
+  if (cell != nullptr) sim::WriteTableCell(*cell, &out);
   double t = 0;
   const auto row = [&](int pass, double rho, double contacts, bool junk) {
     const double p = pass;
@@ -417,3 +421,24 @@ TEST_F(WrenchTableTest, OutputsThatCannotBeWrittenAreRefused) {
 }
 
 }  // namespace
+
+// The cell of a case comes from its validated scene: the attributes a sweep writes from it, or,
+// in a case file made before them, the stored text read as the scene loader reads it (its --set
+// lines included; a raw parse of the text took the base scene's values). Closed form: the axes
+// are exactly the values given.
+TEST(WrenchTableCellTest, FromTheValidatedSceneNotTheRawText) {
+  const fs::path dir = scoopsim_test::ProcessTempDir("wrench_table_cell");
+  // An older case file: the text says snow at 10 mm, its overrides ice at 5 mm.
+  WriteCase(dir, "old", "snow", 0.01,
+            "# scoopsim --set bed.material=ice\n# scoopsim --set dig.bite_depth=0.005\n");
+  // A sweep's case file: the attributes say snow at 20 mm (the text, snow at 10 mm, is not read).
+  sim::Scene scene;
+  scene.bed.material = "snow";
+  scene.bed.radius_min = scene.bed.radius_max = 0.008;
+  scene.dig.bite_depth = 0.02;
+  WriteCase(dir, "new", "snow", 0.01, "", &scene);
+  sim::BuildWrenchTable(dir.string(), (dir / "table.h5").string());
+  const WrenchTable table((dir / "table.h5").string());
+  EXPECT_EQ(table.materials(), (std::vector<std::string>{"snow", "ice"}));
+  EXPECT_EQ(table.bite_depths(), (std::vector<double>{0.005, 0.02}));
+}
