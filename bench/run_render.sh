@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # The render benchmark of scoopsim: `scoopsim bench render` NRUNS times per rasteriser thread
-# count (LP_NUM_THREADS), then the medians. Frames are 1280x720 PNGs of a synthetic bed, written
-# to a temporary folder (removed) and timed including the PNG writing.
+# count (LP_NUM_THREADS), then the medians. Frames are 1280x720 PNGs of a bed the project made:
+# $BED, else out/bench/render_bed.h5, made once by `scoopsim bed scenes/settle_small.yaml` (2000
+# settled snow spheres, r 1.75 mm; about a minute) and laid side by side up to $PARTICLES. Frames
+# go to a temporary folder (removed) and are timed including the PNG writing.
 #
 #   bench/run_render.sh                          # 200,000 particles, 20 frames, threads 1 and 2
+#   BED=out/bed.h5 bench/run_render.sh           # another bed (or a run's output: its last snapshot)
 #   PARTICLES=100000 THREADS="2" bench/run_render.sh
 #   EXTRA="--no-cull" bench/run_render.sh        # without occlusion culling
 #
@@ -18,6 +21,10 @@ THREADS=${THREADS:-"1 2"}
 EXTRA=${EXTRA:-}
 MACHINE=${MACHINE:-$(hostname -s 2>/dev/null || hostname)}
 BIN="$ROOT/build/scoopsim"
+BED=${BED:-$ROOT/out/bench/render_bed.h5}
+if [ ! -s "$BED" ]; then
+  "$BIN" bed "$ROOT/scenes/settle_small.yaml" -o "$BED" --quiet
+fi
 RESDIR="$ROOT/bench/results/$MACHINE"
 CSV="$RESDIR/scoopsim_render.csv"
 mkdir -p "$RESDIR"
@@ -33,7 +40,7 @@ for t in $THREADS; do
   runs=()
   for r in $(seq "$NRUNS"); do
     # shellcheck disable=SC2086  # EXTRA holds separate options
-    line=$("$BIN" bench render --particles "$PARTICLES" --frames "$FRAMES" --threads "$t" $EXTRA)
+    line=$("$BIN" bench render --bed "$BED" --particles "$PARTICLES" --frames "$FRAMES" --threads "$t" $EXTRA)
     echo "$line"
     /usr/bin/python3 - "$line" "$CSV" <<'PY'
 import json, sys, datetime

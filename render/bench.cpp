@@ -10,8 +10,9 @@
 #include <filesystem>
 #include <string>
 
-#include "dem/insertion.h"
 #include "render/frames.h"
+#include "sim/files/saved_run.h"
+#include "sim/input/input_error.h"
 
 namespace render {
 dem::TriangleMesh BoxMesh(const dem::Vec3& lo, const dem::Vec3& hi) {
@@ -29,35 +30,48 @@ int BenchRender(const BenchRenderOptions& options) {
   namespace fs = std::filesystem;
   if (options.threads > 0) setenv("LP_NUM_THREADS", std::to_string(options.threads).c_str(), 1);
 
-  // The bed: lattice layers of pitch 3.6 mm (spheres of 3.5 mm diameter), every other layer
-  // shifted by half a pitch, each centre jittered by up to 0.04 mm (keeps the 0.1 mm gap open).
-  constexpr double kRadius = 1.75e-3, kPitch = 3.6e-3;
-  const dem::Vec3 box_min{0, 0, 0};
-  const double box_x = 0.4, box_y = 0.3;
-  const int nx = static_cast<int>(box_x / kPitch) - 1;
-  const int ny = static_cast<int>(box_y / kPitch) - 1;
-  const int64_t per_layer = static_cast<int64_t>(nx) * ny;
-  const int64_t layers = (options.particles + per_layer - 1) / per_layer;
-  const double top = kRadius + (layers - 1) * kPitch;
-  const dem::Vec3 box_max{box_x, box_y, top + 0.05};  // 5 cm of headroom above the bed
-  dem::Rng rng(7);
-  dem::Particles p;
-  p.x.reserve(options.particles);
-  for (int64_t k = 0; k < options.particles; ++k) {
-    const int64_t layer = k / per_layer, in_layer = k % per_layer;
-    const double shift = (layer % 2) * 0.5 * kPitch;
-    const dem::Vec3 x{
-        box_min.x + kPitch + (in_layer % nx) * kPitch + shift + rng.Uniform(-4e-5, 4e-5),
-        box_min.y + kPitch + (in_layer / nx) * kPitch + rng.Uniform(-4e-5, 4e-5),
-        box_min.z + kRadius + layer * kPitch + rng.Uniform(0, 4e-5)};
-    const double depth = top - x.z;
-    const double speed = 0.05 * std::exp(-depth / 0.01) * rng.Uniform(0.5, 1.0);
-    p.id.push_back(k);
-    p.x.push_back(x);
-    p.v.push_back({speed, 0, 0});
-    p.radius.push_back(kRadius);
-    p.material.push_back(0);
+  // The bed: the file's last snapshot, copied side by side (shifted by the box's floor size) on
+  // a near-square grid until there are options.particles spheres. Copies do not interact: this
+  // is a picture to draw, not a state to step.
+  const sim::SavedRun run(options.bed);
+  dem::Particles tile;
+  run.ReadSnapshot(run.Snapshots().back(), &tile);
+  const sim::StoredScene stored = run.Scene();
+  dem::Vec3 box_min = stored.box_min, box_max = stored.box_max;
+  if (!stored.has_box) {  // a scene without a box: the particles' extent
+    box_min = {1e300, 1e300, 1e300};
+    box_max = {-1e300, -1e300, -1e300};
+    for (size_t i = 0; i < tile.x.size(); ++i) {
+      const dem::Vec3& x = tile.x[i];
+      const double r = tile.radius[i];
+      box_min = {std::min(box_min.x, x.x - r), std::min(box_min.y, x.y - r),
+                 std::min(box_min.z, x.z - r)};
+      box_max = {std::max(box_max.x, x.x + r), std::max(box_max.y, x.y + r),
+                 std::max(box_max.z, x.z + r)};
+    }
   }
+  const int64_t per_tile = static_cast<int64_t>(tile.x.size());
+  if (per_tile == 0) throw sim::InputError(options.bed + ": its last snapshot has no particles");
+  const int64_t wanted = options.particles > 0 ? options.particles : per_tile;
+  const int64_t tiles = (wanted + per_tile - 1) / per_tile;
+  const int64_t across = static_cast<int64_t>(std::ceil(std::sqrt(static_cast<double>(tiles))));
+  const dem::Vec3 size = box_max - box_min;
+  double top = box_min.z;
+  dem::Particles p;
+  p.x.reserve(wanted);
+  for (int64_t k = 0; k < wanted; ++k) {
+    const int64_t t = k / per_tile, i = k % per_tile;
+    const dem::Vec3 shift{(t % across) * size.x, (t / across) * size.y, 0};
+    p.id.push_back(k);
+    p.x.push_back(tile.x[i] + shift);
+    p.v.push_back(tile.v[i]);
+    p.radius.push_back(tile.radius[i]);
+    p.material.push_back(tile.material[i]);
+    top = std::max(top, tile.x[i].z + tile.radius[i]);
+  }
+  const int64_t rows = (tiles + across - 1) / across;
+  box_max = {box_min.x + std::min(tiles, across) * size.x, box_min.y + rows * size.y, box_max.z};
+  const double length = box_max.x - box_min.x;
   const dem::TriangleMesh scoop = BoxMesh({-0.04, -0.03, -0.02}, {0.04, 0.03, 0.02});
 
   const fs::path dir =
@@ -85,7 +99,7 @@ int BenchRender(const BenchRenderOptions& options) {
     view.particles = &p;
     view.box_min = box_min;
     view.box_max = box_max;
-    view.gravity = {0, 0, -1.3};
+    view.gravity = stored.gravity;
     view.meshes.push_back({&scoop, {}});
     frames.Add(view);  // warm-up: shader compilation, first allocation (not timed)
     const double draw0 = frames.draw_seconds(), png0 = frames.png_seconds();
@@ -93,9 +107,10 @@ int BenchRender(const BenchRenderOptions& options) {
     for (int f = 0; f < options.frames; ++f) {
       view.time = 1e-2 * f;
       view.pass = 1;
-      view.rho = 0.3 * f / std::max(options.frames, 1);
+      view.rho = 0.75 * length * f / std::max(options.frames, 1);
       view.force = 10 + f;
-      view.meshes[0].pose.position = {0.05 + view.rho, 0.15, top};
+      view.meshes[0].pose.position = {box_min.x + 0.1 * length + view.rho,
+                                      0.5 * (box_min.y + box_max.y), top};
       frames.Add(view);
     }
     wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -117,8 +132,8 @@ int BenchRender(const BenchRenderOptions& options) {
       "{\"bench\":\"render\",\"particles\":%lld,\"frames\":%d,\"width\":%d,\"height\":%d,"
       "\"threads\":%d,\"png_level\":%d,\"cull\":%s,\"fps\":%.3f,\"draw_ms\":%.2f,\"png_ms\":%.2f,"
       "\"png_kb\":%.1f,\"drawn\":%zu,\"renderer\":\"%s\"}\n",
-      static_cast<long long>(options.particles), frames_done, options.width, options.height,
-      threads, options.png_level, options.cull_hidden ? "true" : "false", frames_done / wall,
+      static_cast<long long>(wanted), frames_done, options.width, options.height, threads,
+      options.png_level, options.cull_hidden ? "true" : "false", frames_done / wall,
       1e3 * draw_s / n, 1e3 * png_s / n, png_bytes / n / 1024.0, drawn, description.c_str());
   return 0;
 }

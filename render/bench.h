@@ -1,11 +1,12 @@
-// `scoopsim bench render`: frames per second of the renderer, PNG writing included, on a synthetic
-// bed. Public header of the render module.
+// `scoopsim bench render`: frames per second of the renderer, PNG writing included, on a bed the
+// project made (a bed file of `scoopsim bed` or a run's output). Public header of the render
+// module.
 #pragma once
 
 #include <cstdint>
 #include <string>
 
-#include "dem/mesh.h"
+#include "sim/files/world_view.h"
 
 namespace render {
 
@@ -14,6 +15,7 @@ namespace render {
 dem::TriangleMesh BoxMesh(const dem::Vec3& lo, const dem::Vec3& hi);
 
 struct BenchRenderOptions {
+  std::string bed;  // a bed file (`scoopsim bed`) or a run's output: its last particle snapshot
   int64_t particles = 200000;
   int frames = 20;
   int threads = 0;  // LP_NUM_THREADS (0: keep the environment's, else llvmpipe's default)
@@ -23,13 +25,15 @@ struct BenchRenderOptions {
   std::string keep_dir;     // when set, frames go here and stay (to look at them)
 };
 
-// Builds a bed of `particles` spheres of radius 1.75 mm (jittered, non-overlapping lattice layers
-// in a 0.4 x 0.3 m box with 5 cm of headroom, speeds falling off with depth), renders `frames`
-// frames of it with the trench_oblique camera and a box-shaped scoop moving through it, writes each
-// as PNG to a temporary folder (removed afterwards), and prints one JSON line: bench, particles,
-// frames, width, height, threads (LP_NUM_THREADS in effect; llvmpipe's default is the core count),
-// png_level, cull, fps, draw_ms, png_ms (means per frame), png_kb (mean size), drawn (particles
-// handed to GL in the last frame), renderer.
+// Reads the last particle snapshot of `bed` (sim::SavedRun) and its box and gravity from the
+// scene stored with it, and lays copies of it side by side on a near-square grid of the box's
+// floor until there are `particles` spheres (the last copy cut short; 0: the file's own count).
+// Renders `frames` frames of that bed with the trench_oblique camera and a box-shaped scoop moving
+// over it, writes each as PNG to a temporary folder (removed afterwards), and prints one JSON
+// line: bench, particles, frames, width, height, threads (LP_NUM_THREADS in effect; llvmpipe's
+// default is the core count), png_level, cull, fps, draw_ms, png_ms (means per frame), png_kb
+// (mean size), drawn (particles handed to GL in the last frame), renderer. Throws
+// sim::InputError for a file that cannot be read as a bed or run.
 int BenchRender(const BenchRenderOptions& options);
 
 }  // namespace render

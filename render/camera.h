@@ -6,7 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "dem/vec3.h"
+// dem::Vec3 comes with the view of the world (render/ reads sim/files and sim/input, never dem/).
+#include "sim/files/world_view.h"
 
 namespace render {
 

@@ -7,8 +7,6 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "dem/transform.h"
-
 namespace render {
 
 void PresetBounds(const std::string& preset, const sim::WorldView& view, dem::Vec3* lo,

@@ -90,6 +90,22 @@ inline int RunScoopsim(const std::string& args, const std::string& stderr_file =
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// The scenes the repository ships: the paths listed in `scenes_dir`/shipped.txt (one a line,
+// relative to scenes_dir; '#' starts a comment), in the list's order. Tests walk these, never the
+// folder, so a user's own scene left in scenes/ is not tested. Empty when the list is missing.
+inline std::vector<std::filesystem::path> ShippedScenes(const std::filesystem::path& scenes_dir) {
+  std::vector<std::filesystem::path> scenes;
+  std::ifstream in(scenes_dir / "shipped.txt");
+  for (std::string line; std::getline(in, line);) {
+    line = line.substr(0, line.find('#'));
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos) continue;
+    line = line.substr(first, line.find_last_not_of(" \t\r") - first + 1);
+    scenes.push_back(scenes_dir / line);
+  }
+  return scenes;
+}
+
 // The whole text of a file ("" if it cannot be read).
 inline std::string ReadText(const std::filesystem::path& path) {
   std::ifstream in(path);

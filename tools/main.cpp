@@ -4,7 +4,7 @@
 //   scoopsim bench settle --particles N --steps S
 //   scoopsim run SCENE --frames DIR [--every S] [--video]   PNG frames while running (render/)
 //   scoopsim render OUT.h5 --frames DIR [--video] [--color-by F] [--camera PRESET]
-//   scoopsim bench render --particles N --frames F [--threads T]
+//   scoopsim bench render --bed BED.h5 --particles N --frames F [--threads T]
 //   scoopsim study shape SCENE [-o OUT.h5] [--templates A,B] [--beds DIR]   the shape study
 //   scoopsim study balovnev SCENE [-o OUT.h5] [--phi-deg P] [--delta-deg D] [--buried]
 //                                 [--model textbook|lander|both]
@@ -684,9 +684,18 @@ Command BenchRender(CLI::App* bench) {
   CLI::App* command = bench->add_subcommand(
       "render",
       "Frames per second of the renderer at 1280x720, PNG writing included (one JSON line)");
-  command->add_option("--particles", options->particles, "Number of spheres")
+  command
+      ->add_option("--bed", options->bed,
+                   "A bed file of `scoopsim bed` or a run's output: its last snapshot is drawn "
+                   "(bench/run_render.sh makes one from scenes/settle_small.yaml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  command
+      ->add_option("--particles", options->particles,
+                   "Number of spheres: copies of the bed side by side, the last cut short; 0 = "
+                   "the bed's own")
       ->capture_default_str()
-      ->check(CLI::Range(int64_t{1}, int64_t{100000000}));
+      ->check(CLI::Range(int64_t{0}, int64_t{100000000}));
   command->add_option("--frames", options->frames, "Frames to time")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));

@@ -400,6 +400,30 @@ TEST(FramesTest, SavedRunDrawsTheSnapshotsMeshes) {
   EXPECT_NEAR(c.b, 0.20 * 255, 1);
 }
 
+// `scoopsim bench render` draws the last snapshot of the file it is given (a bed or a run),
+// copied side by side up to --particles: a run whose last snapshot is one sphere (r 3 cm, in a
+// 0.2 x 0.1 m box), asked for 3, draws three copies 0.2 m apart (none hides another), and its
+// one JSON line says particles 3 and drawn 3. Without --bed it is refused.
+TEST(FramesTest, BenchRenderDrawsTheGivenBedCopiedSideBySide) {
+  const std::string h5 = (TempDir() / "bench_bed.h5").string();
+  {
+    sim::H5Output out(h5, "box: {min: [0, 0, 0], max: [0.2, 0.1, 0.1], wall_material: wall}\n",
+                      "test");
+    out.WriteSnapshot(0.1, OneSphere(0.2));
+    out.WriteSnapshot(0.2, OneSphere(0.5));
+    out.Close();
+  }
+  const std::string json = (TempDir() / "bench.json").string();
+  const std::string cmd = std::string(SCOOPSIM_BINARY) + " bench render --bed " + h5 +
+                          " --particles 3 --frames 2 --threads 1 >" + json + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << scoopsim_test::ReadText(json);
+  const std::string line = scoopsim_test::ReadText(json);
+  EXPECT_NE(line.find("{\"bench\":\"render\",\"particles\":3,\"frames\":2,"), std::string::npos)
+      << line;
+  EXPECT_NE(line.find("\"drawn\":3,"), std::string::npos) << line;
+  EXPECT_NE(Scoopsim("bench render --frames 1"), 0);
+}
+
 // A running world's range comes from its scene (color_map.h): for scenes/arm/nominal_snow.yaml
 // (box 0.15 m high, pushes at 0.05 m/s, a 5 deg/s rotation through 0 deg, r 8 mm snow) speed
 // [0, 0.05] (the push; the rotation's rate times the farthest scoop vertex is slower), depth

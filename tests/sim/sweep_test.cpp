@@ -1,8 +1,8 @@
 // Sweeps (sim/studies/sweep.cpp): the sweep file (cases from a grid and a list, errors at load with
 // the line and key), status records, and end to end on scenes/sweeps/tiny.yaml (four cases, two
-// passes each): a plain run, a two-rank `mpirun` run, `--case I` and runs SIGKILLed mid-case
-// (in a pass without checkpoints, in a pass with them, in the pour) then resumed all give the
-// same table and case rows, bit for bit.
+// passes each; its moves made faster, FastTiny): a plain run, a two-rank `mpirun` run, `--case I`
+// and runs SIGKILLed mid-case (in a pass without checkpoints, in a pass with them, in the pour)
+// then resumed all give the same table and case rows, bit for bit.
 #include "sim/studies/sweep.h"
 
 #include <fcntl.h>
@@ -418,13 +418,45 @@ void CopyCase(const fs::path& from, const fs::path& to, const std::string& name)
     fs::copy_file(from / "cases" / (name + ext), to / "cases" / (name + ext));
 }
 
+// The sweep of the end-to-end test below: scenes/sweeps/tiny.yaml's grid (the same four cases)
+// on tiny_scene.yaml with both rotations at 180 deg/s instead of Table 1's 90 (the linear push
+// and the second rotation start earlier to match): the same bed and the same moves in the same
+// order, each pass 1.5 s of simulated time instead of 2.4 s, which is what the test costs. (At
+// 270 deg/s the deep ice case throws a particle out of the box; 180 keeps every case valid.)
+// Written once into the test's folder, its relative paths made absolute.
+const std::string& FastTiny() {
+  static const std::string path = [] {
+    std::string scene = scoopsim_test::ReadText(kSourceDir + "/scenes/sweeps/tiny_scene.yaml");
+    const std::pair<std::string, std::string> edits[] = {
+        {"materials: ../", "materials: " + kSourceDir + "/scenes/"},
+        {"mesh: ../../", "mesh: " + kSourceDir + "/"},
+        {"rotation1: {start: 0.2}", "rotation1: {start: 0.2, rate: 180}"},
+        {"linear: {start: 1.2,", "linear: {start: 0.75,"},
+        {"rotation2: {start: 1.35}", "rotation2: {start: 0.9, rate: 180}"}};
+    for (const auto& [from, to] : edits) {
+      const size_t at = scene.find(from);
+      EXPECT_NE(at, std::string::npos) << "tiny_scene.yaml has no '" << from << "'";
+      if (at != std::string::npos) scene.replace(at, from.size(), to);
+    }
+    std::ofstream(TempDir() / "fast_tiny_scene.yaml") << scene;
+    std::string sweep = scoopsim_test::ReadText(kTiny);
+    const std::string base = "scene: tiny_scene.yaml";
+    EXPECT_NE(sweep.find(base), std::string::npos) << kTiny;
+    if (sweep.find(base) != std::string::npos)
+      sweep.replace(sweep.find(base), base.size(), "scene: fast_tiny_scene.yaml");
+    std::ofstream(TempDir() / "fast_tiny.yaml") << sweep;
+    return (TempDir() / "fast_tiny.yaml").string();
+  }();
+  return path;
+}
+
 // The tiny sweep on 2 MPI ranks into `dir`, its output in `log`: the raw std::system status.
 int MpiSweep(const fs::path& dir, const std::string& log) {
   const std::string cmd =
       "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
       "OMPI_MCA_rmaps_base_oversubscribe=1 " +
       std::string(SCOOPSIM_MPIEXEC) + " -np 2 --oversubscribe " + SCOOPSIM_BINARY + " sweep " +
-      kTiny + " -o " + dir.string() + " -q >" + log + " 2>&1";
+      FastTiny() + " -o " + dir.string() + " -q >" + log + " 2>&1";
   return std::system(cmd.c_str());
 }
 
@@ -432,7 +464,7 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
   const fs::path plain = TempDir() / "plain";
   const std::string log = (TempDir() / "plain.log").string();
   ASSERT_EQ(scoopsim_test::RunScoopsim(
-                "sweep " + kTiny + " -o " + plain.string() + " --threads 1 -q", log),
+                "sweep " + FastTiny() + " -o " + plain.string() + " --threads 1 -q", log),
             0)
       << ReadText(log);
   for (const char* name : kCases) {
@@ -463,8 +495,9 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
 
   // A second plain run skips every case.
   const std::string again_log = (TempDir() / "again.log").string();
-  ASSERT_EQ(
-      scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + plain.string() + " -q", again_log), 0);
+  ASSERT_EQ(scoopsim_test::RunScoopsim("sweep " + FastTiny() + " -o " + plain.string() + " -q",
+                                       again_log),
+            0);
   EXPECT_NE(ReadText(again_log).find("[0/4] snow_b5 skipped (done)"), std::string::npos);
   EXPECT_EQ(ReadText(again_log).find("started"), std::string::npos) << ReadText(again_log);
 
@@ -486,7 +519,7 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
   {
     SCOPED_TRACE("--case 2");
     const fs::path one = TempDir() / "one";
-    ASSERT_EQ(scoopsim_test::RunScoopsim("sweep " + kTiny + " --case 2 -o " + one.string() +
+    ASSERT_EQ(scoopsim_test::RunScoopsim("sweep " + FastTiny() + " --case 2 -o " + one.string() +
                                          " --threads 1 -q"),
               0);
     std::vector<std::string> files;
@@ -510,9 +543,9 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
     const int fd = HoldLock(lock);
     ASSERT_GE(fd, 0);
     const std::string held_log = (TempDir() / "held.log").string();
-    EXPECT_EQ(
-        scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + shared.string() + " -q", held_log),
-        0)
+    EXPECT_EQ(scoopsim_test::RunScoopsim("sweep " + FastTiny() + " -o " + shared.string() + " -q",
+                                         held_log),
+              0)
         << ReadText(held_log);
     const std::string text = ReadText(held_log);
     EXPECT_NE(text.find("[1/4] snow_b10 left to another process (it holds cases/snow_b10.lock)"),
@@ -524,7 +557,7 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
     EXPECT_FALSE(fs::exists(shared / "table.h5"));
     const std::string one_log = (TempDir() / "held_one.log").string();
     EXPECT_EQ(scoopsim_test::RunScoopsim(
-                  "sweep " + kTiny + " --case 1 -o " + shared.string() + " -q", one_log),
+                  "sweep " + FastTiny() + " --case 1 -o " + shared.string() + " -q", one_log),
               1);
     EXPECT_NE(ReadText(one_log).find("case snow_b10 is being run by another process"),
               std::string::npos)
@@ -540,20 +573,22 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
     }
     CopyCase(plain, shared, "snow_b10");
     ::close(fd);
-    EXPECT_EQ(scoopsim_test::RunScoopsim("sweep " + kTiny + " -o " + shared.string() + " -q"), 0);
+    EXPECT_EQ(scoopsim_test::RunScoopsim("sweep " + FastTiny() + " -o " + shared.string() + " -q"),
+              0);
     ExpectSameData(plain / "table.h5", shared / "table.h5");
   }
-  // Three cases done already (copied), then the sweep is SIGKILLed `kill` into snow_b10 with
-  // checkpoints every `every` seconds of wall time, then resumed: the same table and rows.
-  // Returns the resumed run's log.
+  // Three cases done already (copied), then the sweep is SIGKILLed `kill` into ice_b10 (ice's
+  // time step is longer than snow's: its case takes the fewest steps) with checkpoints every
+  // `every` seconds of wall time, then resumed: the same table and rows. Returns the resumed
+  // run's log.
   const auto kill_and_resume = [&](const std::string& folder, const std::string& kill,
                                    const std::string& every, const auto& while_killed) {
     const fs::path resumed = TempDir() / folder;
     fs::create_directories(resumed / "cases");
-    for (const char* name : {"snow_b5", "ice_b5", "ice_b10"}) CopyCase(plain, resumed, name);
+    for (const char* name : {"snow_b5", "snow_b10", "ice_b5"}) CopyCase(plain, resumed, name);
     const std::string killed_log = (TempDir() / (folder + ".killed.log")).string();
-    const std::string cmd = "SCOOPSIM_SWEEP_KILL=snow_b10:" + kill + " " +
-                            std::string(SCOOPSIM_BINARY) + " sweep " + kTiny + " -o " +
+    const std::string cmd = "SCOOPSIM_SWEEP_KILL=ice_b10:" + kill + " " +
+                            std::string(SCOOPSIM_BINARY) + " sweep " + FastTiny() + " -o " +
                             resumed.string() + " --threads 1 -q --checkpoint-every " + every +
                             " 2>" + killed_log;
     const int killed = std::system(cmd.c_str());
@@ -561,7 +596,7 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
       // The controlled stop: exit 130, the case kept and reported as stopped, not failed.
       const std::string text = ReadText(killed_log);
       EXPECT_TRUE(WIFEXITED(killed) && WEXITSTATUS(killed) == 130) << killed << ": " << text;
-      EXPECT_NE(text.find("snow_b10 stopped after"), std::string::npos) << text;
+      EXPECT_NE(text.find("ice_b10 stopped after"), std::string::npos) << text;
       EXPECT_NE(text.find("kept; the same command goes on"), std::string::npos) << text;
       EXPECT_EQ(text.find("FAILED"), std::string::npos) << text;
     } else {
@@ -570,31 +605,32 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
           << killed << ": " << ReadText(killed_log);
     }
     EXPECT_FALSE(fs::exists(resumed / "table.h5"));
-    while_killed(resumed / "cases" / "snow_b10.parts",
-                 sim::ReadCaseStatus((resumed / "cases" / "snow_b10.status").string()));
+    while_killed(resumed / "cases" / "ice_b10.parts",
+                 sim::ReadCaseStatus((resumed / "cases" / "ice_b10.status").string()));
 
     const std::string resume_log = (TempDir() / (folder + ".resume.log")).string();
-    EXPECT_EQ(scoopsim_test::RunScoopsim(
-                  "sweep " + kTiny + " -o " + resumed.string() + " --threads 1 -q", resume_log),
-              0)
+    EXPECT_EQ(
+        scoopsim_test::RunScoopsim(
+            "sweep " + FastTiny() + " -o " + resumed.string() + " --threads 1 -q", resume_log),
+        0)
         << ReadText(resume_log);
     const std::string text = ReadText(resume_log);
-    for (const char* done : {"snow_b5 skipped", "ice_b5 skipped", "ice_b10 skipped"})
+    for (const char* done : {"snow_b5 skipped", "snow_b10 skipped", "ice_b5 skipped"})
       EXPECT_NE(text.find(done), std::string::npos) << text;
     ExpectSameData(plain / "table.h5", resumed / "table.h5");
-    ExpectSameData(plain / "cases" / "snow_b10.h5", resumed / "cases" / "snow_b10.h5", "sweep");
+    ExpectSameData(plain / "cases" / "ice_b10.h5", resumed / "cases" / "ice_b10.h5", "sweep");
     // The root attributes of the dig (a pass resumed from a checkpoint wrote start_time 0).
     for (const char* name : {"start_time", "surface", "scoop_mass", "time"}) {
       const double want =
-          sim::SavedRun((plain / "cases" / "snow_b10.h5").string()).RootNumber(name, -1);
+          sim::SavedRun((plain / "cases" / "ice_b10.h5").string()).RootNumber(name, -1);
       EXPECT_GT(want, 0) << name;
-      EXPECT_EQ(sim::SavedRun((resumed / "cases" / "snow_b10.h5").string()).RootNumber(name, -1),
+      EXPECT_EQ(sim::SavedRun((resumed / "cases" / "ice_b10.h5").string()).RootNumber(name, -1),
                 want)
           << name;
     }
-    EXPECT_EQ(RootString(resumed / "cases" / "snow_b10.h5", "state_hash"),
-              RootString(plain / "cases" / "snow_b10.h5", "state_hash"));
-    EXPECT_FALSE(fs::exists(resumed / "cases" / "snow_b10.parts"));
+    EXPECT_EQ(RootString(resumed / "cases" / "ice_b10.h5", "state_hash"),
+              RootString(plain / "cases" / "ice_b10.h5", "state_hash"));
+    EXPECT_FALSE(fs::exists(resumed / "cases" / "ice_b10.parts"));
     return text;
   };
   {
@@ -625,7 +661,7 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
               sim::SavedRun((parts / "bed_1.h5").string()).RootNumber("time", 1e9);
           EXPECT_GT(sim::ReadCheckpoint((parts / "pass_2.restart.h5").string()).time, pass2_start);
         });
-    EXPECT_NE(text.find("snow_b10 goes on from"), std::string::npos) << text;
+    EXPECT_NE(text.find("ice_b10 goes on from"), std::string::npos) << text;
     EXPECT_NE(text.find("(resumed at pass 2)"), std::string::npos) << text;
   }
   {
@@ -636,7 +672,7 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
           EXPECT_EQ(status.passes_done, 0);
           EXPECT_TRUE(fs::exists(parts / "pass_1.restart.h5"));
         });
-    EXPECT_NE(text.find("snow_b10 goes on from"), std::string::npos) << text;
+    EXPECT_NE(text.find("ice_b10 goes on from"), std::string::npos) << text;
   }
   {
     SCOPED_TRACE("killed in the pour: it goes on from its last keep");
@@ -662,7 +698,7 @@ TEST(SweepRunTest, PlainMpiOneCaseAndResumedSweepsAgree) {
                           EXPECT_EQ(status.passes_done, 1);
                           EXPECT_TRUE(fs::exists(parts / "pass_2.restart.h5"));
                         });
-    EXPECT_NE(text.find("snow_b10 goes on from"), std::string::npos) << text;
+    EXPECT_NE(text.find("ice_b10 goes on from"), std::string::npos) << text;
     EXPECT_NE(text.find("(resumed at pass 2)"), std::string::npos) << text;
   }
 }
