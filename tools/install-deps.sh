@@ -2,7 +2,10 @@
 # Installs every Debian package scoopsim needs. Idempotent; runs as root or through sudo.
 #   tools/install-deps.sh          what building, running and plotting need
 #   tools/install-deps.sh --test   also what only the tests need (chromium: tools/report.py's page
-#                                  is checked in a headless browser); tools/test.sh passes it
+#                                  is checked in a headless browser; pytest for the Python
+#                                  module's tests); tools/test.sh passes it
+# The Python module needs pybind11-dev and python3-dev; runs as ROS bags need python3-rosbag and
+# the message packages (ROS 1 Noetic's, as Debian 12 ships them).
 set -euo pipefail
 PKGS=(
   build-essential cmake pkg-config git
@@ -12,9 +15,11 @@ PKGS=(
   openmpi-bin libopenmpi-dev
   libosmesa6-dev libgl-dev libpng-dev
   libbullet-dev liburdfdom-dev libeigen3-dev
+  pybind11-dev python3-dev
+  python3-rosbag python3-std-msgs python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs
 )
 case "${1:-}" in
-  --test) PKGS+=(chromium) ;;
+  --test) PKGS+=(chromium python3-pytest) ;;
   "") ;;
   *) echo "install-deps: unknown argument $1 (expected --test or nothing)" >&2; exit 2 ;;
 esac
