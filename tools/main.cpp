@@ -746,6 +746,27 @@ Command ArmInfo(CLI::App* arm) {
           nullptr};
 }
 
+// A saved run as a ROS 1 bag: tools/export_rosbag.py (python3-rosbag), run as the studies run
+// their plot scripts; its own one-line errors come first on stderr.
+Command ExportRosbag(CLI::App* exporter) {
+  struct Args {
+    std::string run, out;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* command = exporter->add_subcommand(
+      "rosbag", "Write a run of an arm scene (RUN.h5) as a ROS 1 bag (docs/ros.md)");
+  command->add_option("RUN", args->run, "A run file of a scene with an arm: block (.h5)")
+      ->required();
+  command->add_option("-o,--output", args->out, "The bag to write (.bag)")->required();
+  return {Given(command),
+          [args] {
+            return sim::RunPlotScript("export_rosbag.py", {args->run, "-o", args->out})
+                       ? sim::kExitOk
+                       : kExitFailure;
+          },
+          nullptr};
+}
+
 // Commands that hold subcommands (`scoopsim study shape`), made when their first one is added.
 struct Group {
   const char* name;
@@ -755,6 +776,7 @@ constexpr Group kGroups[] = {
     {"study", "Studies of the reference paper"},
     {"bench", "Benchmarks"},
     {"arm", "The arm alone (its URDF), without the DEM"},
+    {"export", "A saved run in other tools' formats"},
 };
 
 // Every subcommand, in the order of --help: its group ("" for a top-level command) and setup.
@@ -775,6 +797,7 @@ constexpr Entry kCommands[] = {
     {"bench", BenchRender},
     {"", SweepAndTable},
     {"arm", ArmInfo},
+    {"export", ExportRosbag},
 };
 
 int Main(int argc, char** argv) {

@@ -52,15 +52,19 @@ def read_events(f):
     return [(float(t), int(flag), int(k), float(v), float(lim)) for t, flag, k, v, lim in data]
 
 
-def read_run(path, joint):
-    """The series of one joint of a run file, times on the run's clock."""
+def open_run(path):
+    """A run file opened read-only; InputError for a missing file or one that is not HDF5."""
     if not os.path.isfile(path):
         raise InputError("%s: no such file (expected a scoopsim run file with /arm/, .h5)" % path)
     try:
-        f = h5py.File(path, "r")
+        return h5py.File(path, "r")
     except OSError as e:
         raise InputError("%s: cannot open as HDF5 (%s)" % (path, e))
-    with f:
+
+
+def read_run(path, joint):
+    """The series of one joint of a run file, times on the run's clock."""
+    with open_run(path) as f:
         for name in REQUIRED:
             if "arm/" + name not in f:
                 raise InputError("%s: missing dataset /arm/%s (expected a run of a scene with an "
