@@ -5,8 +5,9 @@
   event of /arm/fault_events;
 - every stamp (header and record) the row's time to the nearest nanosecond (epoch 0), and
   --epoch adds its seconds;
-- joint states, demanded torque, limits (URDF x derate), the l_scoop wrench and the fault bits
-  bit for bit equal to the HDF5; frame ids l_scoop, base_link, world;
+- joint states, demanded torque, limits (URDF x derate, on a copy derated to 0.6; and a copy as
+  files before the derate's dataset, the derated limit alone), the l_scoop wrench and the fault
+  bits bit for bit equal to the HDF5; frame ids l_scoop, base_link, world;
 - the base_link wrench: rotated back by Rz(arm_base_yaw) it is /scoop/force_world, torque_world
   (closed form, on a copy of the run given a yaw of 0.7 rad: the run's own yaw is 0);
 - the /tf chain world -> l_scoop (the URDF in Python) against /scoop/pose, the pose Bullet gave
@@ -92,7 +93,9 @@ def check_bag(topics, f, epoch=0.0):
                                ("/arm/joint_reference", "position", "joint_reference"),
                                ("/arm/torque_demanded", "effort", "torque_demanded")):
         assert (bits(column(topic, field)) == bits(f["arm/" + name][()])).all(), (topic, field)
-    limit = f["arm/effort_limit"][()] * f["arm/effort_derate"][()]
+    limit = f["arm/effort_limit"][()]  # a file before the derate holds the derated limit here
+    if "arm/effort_derate" in f:
+        limit = limit * f["arm/effort_derate"][()]
     assert (bits(column("/arm/effort_limit", "effort")) == bits(limit)).all()
     assert all(list(m.name) == joints for m, _ in topics["/joint_states"])
     assert [m.value for m, _ in topics["/arm_faults_status"]] == [
@@ -172,11 +175,13 @@ def main():
         assert cli.returncode == 0, cli.stderr
         with open(bag, "rb") as a, open(os.path.join(d, "cli.bag"), "rb") as b:
             assert a.read() == b.read(), "the CLI's bag differs from the script's"
-        # The base frame on a copy turned by 0.7 rad: Rz(yaw) base = world.
+        # The base frame on a copy turned by 0.7 rad: Rz(yaw) base = world; its joints derated
+        # to 0.6 (the limit is the product).
         yawed = os.path.join(d, "yawed.h5")
         shutil.copy(run, yawed)
         with h5py.File(yawed, "r+") as f:
             f.attrs["arm_base_yaw"] = 0.7
+            f["arm/effort_derate"][...] = 0.6
         assert export([yawed, "-o", os.path.join(d, "yawed.bag")]).returncode == 0
         rz = export_rosbag.axis_matrix((0, 0, 1), 0.7)
         with h5py.File(yawed, "r") as f:
@@ -186,6 +191,15 @@ def main():
                 scale = np.abs(world).max()
                 assert np.abs(base @ rz.T - world).max() <= 1e-14 * scale
                 assert np.abs(base - world).max() > 0.1 * scale  # the yaw did turn it
+        # A file from before the derate's dataset: effort_limit holds the derated limit.
+        old = os.path.join(d, "old.h5")
+        shutil.copy(yawed, old)
+        with h5py.File(old, "r+") as f:
+            f["arm/effort_limit"][...] = f["arm/effort_limit"][()] * f["arm/effort_derate"][()]
+            del f["arm/effort_derate"]
+        assert export([old, "-o", os.path.join(d, "old.bag")]).returncode == 0
+        with h5py.File(old, "r") as f:
+            check_bag(read_bag(os.path.join(d, "old.bag")), f)
         # Bad input: a file without /arm/.
         plain = os.path.join(d, "plain.h5")
         with h5py.File(plain, "w") as f:
