@@ -23,8 +23,9 @@ Topics (docs/ros.md):
                          /arm/fault_bits, every bit active since the previous row
   /arm/fault_events      std_msgs/String, one per event at its time: "FLAG joint value limit"
   /tf                    tf2_msgs/TFMessage: each movable joint's parent -> child link transform
-  /tf_static             tf2_msgs/TFMessage, once at the first row: world -> base_link (the root
-                         attributes arm_base_x, _y, _z, _yaw) and the URDF's fixed joints
+  /tf_static             tf2_msgs/TFMessage, once at the first row, latched: world -> base_link
+                         (the root attributes arm_base_x, _y, _z, _yaw) and the URDF's fixed
+                         joints
 The link transforms are the URDF's joint chain (origin xyz, rpy as R = Rz(Y) Ry(P) Rx(R), then
 the rotation by q about the joint's axis), computed here from the URDF named by the root
 attribute arm_urdf (or --urdf); the test checks that the chain to l_scoop gives /scoop/pose.
@@ -272,7 +273,13 @@ def write_bag(run, out, epoch):
     counts = {}
     with rosbag.Bag(out, "w") as bag:
         def put(topic, msg, when):
-            bag.write(topic, msg, when)
+            # /tf_static latched, as tf2's static broadcaster: `rosbag play` keeps it for late
+            # subscribers (RViz).
+            header = None
+            if topic == "/tf_static":  # the whole connection header, as rosbag takes it
+                header = {"topic": topic, "type": msg._type, "md5sum": msg._md5sum,
+                          "message_definition": msg._full_text, "latching": "1"}
+            bag.write(topic, msg, when, connection_header=header)
             counts[topic] = counts.get(topic, 0) + 1
 
         t0 = stamp(run["time"][0], epoch)

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """tools/export_rosbag.py and `scoopsim export rosbag` on the boulder fault run
 (scenes/fault/boulder.yaml, ~10 s: label slow), read back with python3-rosbag:
-- one message per /arm/ row on each per-row topic, one /tf_static, one /arm/fault_events per
-  event of /arm/fault_events;
+- one message per /arm/ row on each per-row topic, one /tf_static (latched), one
+  /arm/fault_events per event of /arm/fault_events;
 - every stamp (header and record) the row's time to the nearest nanosecond (epoch 0), and
   --epoch adds its seconds;
 - joint states, demanded torque, limits (URDF x derate, on a copy derated to 0.6; and a copy as
@@ -48,8 +48,9 @@ def bits(a):
 def read_bag(path):
     topics = {}
     with rosbag.Bag(path) as bag:
-        for topic, msg, t in bag.read_messages():
+        for topic, msg, t, header in bag.read_messages(return_connection_header=True):
             topics.setdefault(topic, []).append((msg, t))
+            assert header.get("latching", b"0") == (b"1" if topic == "/tf_static" else b"0"), topic
     return topics
 
 
