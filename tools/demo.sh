@@ -8,12 +8,15 @@ cd "$(dirname "$0")/.."
 
 bash tools/install-deps.sh
 
+# Tests stay on (SCOOPSIM_TESTS, the default): build/ is also tools/test.sh's, and install-deps.sh
+# has installed GoogleTest; only the CLI is built.
 cmake --preset release >/dev/null
 cmake --build build -j"$(nproc)" --target scoopsim
 
 mkdir -p out
 build/scoopsim run scenes/quick_dig.yaml -o out/quick_dig.h5 --frames out/quick_dig_frames
-/usr/bin/python3 tools/plot_wrench.py out/quick_dig.h5 -o out/quick_dig_wrench.png
+# The Python the Debian packages above went into (a python3 earlier on PATH may lack them).
+"${SCOOPSIM_PYTHON:-/usr/bin/python3}" tools/plot_wrench.py out/quick_dig.h5 -o out/quick_dig_wrench.png
 
 echo
 echo "demo: outputs"

@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Fz (l_scoop frame) pass by pass: where along a pass the vertical load on the scoop goes, and
 where each pass first touches the bed (issue 39, item 4).
 

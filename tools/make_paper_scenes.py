@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Writes the reference study's scenes into scenes/paper/ (run from anywhere; idempotent).
 
   bed_snow.yaml, bed_ice.yaml      full-scale beds for the lookup-table set (scoopsim bed)

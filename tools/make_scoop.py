@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Builds the simplified Phoenix scoop mesh (assets/scoop.stl and assets/scoop.obj).
 
 Source: the seven-plate table of FACTS.md section 3. Each plate is a closed box with its real

@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Plots a dig against Balovnev's model: the CSV of `scoopsim study balovnev` -> one PNG.
 
     tools/plot_balovnev.py OUT.balovnev.csv -o OUT.balovnev.png [--smooth 25]

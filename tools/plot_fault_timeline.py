@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Plots an arm's joint torque against time with its effort limit and the fault flags raised.
 
     tools/plot_fault_timeline.py RUN.h5 [RUN2.h5 ...] -o PLOT.png [--joint NAME]

@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """The lookup set's figures (the study's Fig. 9-11) and its trends as numbers, from a wrench table.
 
     tools/plot_lookup.py TABLE.h5 -o DIR [--cases SWEEP_DIR] [--frame body|scoop] [--smooth W]

@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Draws the particle-size study's figures from the files of `scoopsim study particle-size`.
 
     tools/plot_size_study.py DIR

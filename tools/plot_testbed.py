@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """The sand testbed (paper Fig. 13): the three body-frame force components against the distance
 pushed, over several beds, with their band.
 

@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Plots the wrench on the scoop against rho, the way the paper's figures do.
 
     tools/plot_wrench.py RUN.h5 [RUN2.h5 ...] -o PLOT.png [--frame body|scoop|world]

@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """One self-contained HTML page of the study's analyses (paper section 4) from a results folder.
 
     tools/report.py DIR [-o REPORT.html]        (default DIR/report.html)

@@ -15,7 +15,7 @@ if [ $# -lt 1 ] || [ $# -gt 2 ]; then
 fi
 dir=$1
 out=${2:-$dir/report.html}
-py=/usr/bin/python3
+py=${SCOOPSIM_PYTHON:-python3}  # any Python with numpy, h5py and matplotlib
 stale() {  # stale IN OUT...: an OUT is missing or older than IN
   local in=$1 out
   shift
@@ -25,11 +25,11 @@ stale() {  # stale IN OUT...: an OUT is missing or older than IN
   return 1
 }
 if [ -f "$dir/shape/shape.h5" ] && stale "$dir/shape/shape.h5" "$dir/shape/shape_force.png"; then
-  $py tools/plot_wrench.py "$dir/shape/shape.h5" --force-only -o "$dir/shape/shape_force.png"
+  "$py" tools/plot_wrench.py "$dir/shape/shape.h5" --force-only -o "$dir/shape/shape_force.png"
 fi
 lookup=$dir/lookup
 if [ -f "$lookup/table.h5" ] && stale "$lookup/table.h5" "$lookup/lookup_trends.csv" \
   "$lookup/lookup_fig9.png" "$lookup/lookup_fig10.png" "$lookup/lookup_fig11.png"; then
-  $py tools/plot_lookup.py "$lookup/table.h5" -o "$lookup"
+  "$py" tools/plot_lookup.py "$lookup/table.h5" -o "$lookup"
 fi
-$py tools/report.py "$dir" -o "$out"
+"$py" tools/report.py "$dir" -o "$out"

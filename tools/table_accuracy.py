@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """How good is a wrench table at a bite depth it does not hold (issue 20 item 5).
 
 From a sweep's output folder holding a low and a high bite depth case, a DEM reference case at
@@ -14,7 +14,7 @@ the bite depth in between and a second reference on another bed (another bed.see
 Prints the table, writes it as CSV (a row per pass and component) and draws component vs rho
 (a PNG per pass: <png stem>_p<pass>.png).
 
-  /usr/bin/python3 tools/table_accuracy.py out/accuracy7 [--low b5 --high b9 --ref b7
+  python3 tools/table_accuracy.py out/accuracy7 [--low b5 --high b9 --ref b7
       --noise b7_bed2 --material snow --passes 1,2,3] [--scoopsim build/scoopsim]
       [--csv bench/results/vm/table_accuracy_7mm.csv] [--png /tmp/issue20_figs/table_accuracy_7mm.png]
 """

@@ -28,7 +28,7 @@ preset=release
 if [ "${CI:-}" = "true" ]; then preset=ci; fi
 jobs=$(nproc)
 
-cmake --preset "$preset"
+cmake --preset "$preset" -DSCOOPSIM_TESTS=ON  # ON even where build/ was configured without them
 cmake --build build -j"$jobs"
 
 # ctest runs nproc tests at once and each may start nproc OpenMP threads: with the default

@@ -31,6 +31,6 @@ if [ ! -f "$out/seed1.h5" ]; then
 fi
 timed sweep build/scoopsim sweep scenes/sweeps/testbed_sand.yaml -o "$out/sweep" --no-table \
   --threads "$threads" -q
-/usr/bin/python3 tools/plot_testbed.py "$out/seed1.h5" "$out"/sweep/cases/*.h5 \
+"${SCOOPSIM_PYTHON:-python3}" tools/plot_testbed.py "$out/seed1.h5" "$out"/sweep/cases/*.h5 \
   -o "$out/testbed_sand.png" --csv "$out/summary.csv"
 echo "tools/testbed_sand.sh: $out/testbed_sand.png, $out/seed1.balovnev.png, $out/times.txt"

@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Makes a large bed from a small settled one by mirror tiling (LIGGGHTS `replicate`, mirrored).
 
     tools/tile_bed.py SMALL.h5 --box XMIN YMIN XMAX YMAX --tiles NX NY -o BIG.h5

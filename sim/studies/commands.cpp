@@ -70,17 +70,38 @@ void CheckWritable(const std::string& path) {
   std::filesystem::remove(probe, ignored);
 }
 
+std::string PythonInterpreter() {
+  const char* chosen = std::getenv("SCOOPSIM_PYTHON");
+  return chosen != nullptr && chosen[0] != '\0' ? chosen : "python3";
+}
+
+std::string ToolsDir() {
+  namespace fs = std::filesystem;
+  // An installed binary (PREFIX/bin/scoopsim) has its scripts in PREFIX/share/scoopsim/tools
+  // (cmake/install.cmake); the build tree's binary, and a program of a user's that links sim,
+  // those of the source tree.
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const fs::path installed = exe.parent_path() / SCOOPSIM_BIN_TO_DATA / "tools";
+    if (fs::is_directory(installed, ec)) return installed.lexically_normal().string();
+  }
+  return std::string(SCOOPSIM_SOURCE_DIR) + "/tools";
+}
+
 bool RunPlotScript(const std::string& script, const std::vector<std::string>& args) {
   const auto quote = [](const std::string& text) {
     std::string q = "'";
     for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
     return q + "'";
   };
-  std::string command =
-      "/usr/bin/python3 " + quote(std::string(SCOOPSIM_SOURCE_DIR) + "/tools/" + script);
+  std::string command = quote(PythonInterpreter()) + " " + quote(ToolsDir() + "/" + script);
   for (const std::string& arg : args) command += " " + quote(arg);
   if (std::system(command.c_str()) == 0) return true;
-  std::fprintf(stderr, "scoopsim: the plot failed: %s\n", command.c_str());
+  std::fprintf(stderr,
+               "scoopsim: the plot failed: %s (the Python of SCOOPSIM_PYTHON, else python3 on "
+               "PATH, needs numpy, h5py and matplotlib)\n",
+               command.c_str());
   return false;
 }
 

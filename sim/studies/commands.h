@@ -29,7 +29,14 @@ void RefuseOutputOverInput(const std::string& output, const std::string& input,
 // arm's URDF and (with `bed_file`) bed.file.
 void RefuseOutputOverScene(const std::string& output, const Scene& scene, bool bed_file = true);
 
-// Runs /usr/bin/python3 <source>/tools/<script> with `args` (each quoted for the shell), as the
+// The Python that runs the tools' scripts: the environment's SCOOPSIM_PYTHON when set and not
+// empty, else `python3` as PATH finds it (any Python with numpy, h5py and matplotlib: a venv's, or
+// Debian's /usr/bin/python3 with the packages of tools/install-deps.sh).
+std::string PythonInterpreter();
+// The folder of the tools' scripts: PREFIX/share/scoopsim/tools beside an installed
+// PREFIX/bin/scoopsim, else the source tree's tools/.
+std::string ToolsDir();
+// Runs PythonInterpreter() ToolsDir()/<script> with `args` (each quoted for the shell), as the
 // studies draw their figures; false (and a line on stderr naming the command) when it fails.
 bool RunPlotScript(const std::string& script, const std::vector<std::string>& args);
 
@@ -85,7 +92,7 @@ int RunShapeStudy(const Scene& scene, const ShapeStudyOptions& options);
 // rho_bulk, g, q, b = 0 and caps); '#' lines state the parameters), prints a table (ten spans of
 // the rows that cut, and their mean) of the models `show_textbook` / `show_lander` choose on
 // stdout, and with `plot` draws them in OUT.balovnev.png by tools/plot_balovnev.py
-// (/usr/bin/python3; exit 1 if that fails).
+// (PythonInterpreter(); exit 1 if that fails).
 struct BalovnevStudyOptions {
   int threads = 0;  // 0 = all cores
   std::string output;
@@ -119,7 +126,7 @@ std::string BalovnevPngPath(const std::string& output);  // OUT.h5 -> OUT.balovn
 //                        torque, force_smooth, torque_smooth
 //   stdout               the table
 //   DIR/size_force.png, DIR/size_stack.png, DIR/size_mpe.png   by tools/plot_size_study.py
-//                        (Fig. 3, 4 and 6 analogues; /usr/bin/python3; exit 1 if it fails)
+//                        (Fig. 3, 4 and 6 analogues; PythonInterpreter(); exit 1 if it fails)
 struct SizeStudyOptions {
   std::string dir = "out/size_study";
   std::vector<double> sizes_mm;  // empty: the study's S (eq. 5)

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -17,6 +18,7 @@
 
 #include "sim/studies/balovnev.h"
 #include "sim/files/saved_run.h"
+#include "sim/studies/commands.h"
 #include "sim/studies/size_study.h"
 #include "tests/cli_util.h"
 
@@ -28,6 +30,12 @@ fs::path TempDir() {
   static const fs::path dir = scoopsim_test::ProcessTempDir("study");
   return dir;
 }
+
+// The studies run their plot scripts under the environment's SCOOPSIM_PYTHON, else python3 on PATH
+// (sim::PythonInterpreter); a test that plots names the Python with numpy, h5py and matplotlib
+// that CMake's SCOOPSIM_PYTHON gives (tests/CMakeLists.txt), as a python3 first on PATH may lack
+// them. The CLI it runs inherits it.
+void UseTestPython() { setenv("SCOOPSIM_PYTHON", SCOOPSIM_TEST_PYTHON, 1); }
 
 // An ASCII STL of the box [-h, h] x [-h, h] x [-t, t] (12 facets, outward normals).
 void WriteBoxStl(const fs::path& path, double h, double t) {
@@ -257,6 +265,7 @@ std::string WriteSphereScene() {
 // sim::BalovnevLander at that depth (its own gamma and q). The table is printed,
 // the PNG drawn.
 TEST(BalovnevStudyTest, CsvMatchesTheRunAndTheModel) {
+  UseTestPython();
   const std::string scene = WriteSphereScene();
   const std::string out = (TempDir() / "balovnev.h5").string();
   const std::string table = (TempDir() / "balovnev.txt").string();
@@ -369,12 +378,37 @@ TEST(BalovnevStudyTest, DeltaAbovePhiIsBadInput) {
   EXPECT_FALSE(fs::exists(TempDir() / "bad.h5"));
 }
 
+// sim::RunPlotScript runs PythonInterpreter() ToolsDir()/SCRIPT ARGS: a stand-in interpreter (a
+// shell script) given as SCOOPSIM_PYTHON writes down the arguments it got, each whole (a space
+// and a quote in them); the source tree's tools/ for this binary, which is not installed. An
+// interpreter that fails (/bin/false) is a failed plot; an empty or unset SCOOPSIM_PYTHON means
+// python3 as PATH finds it.
+TEST(RunPlotScriptTest, RunsTheScriptUnderScoopsimPython) {
+  const fs::path fake = TempDir() / "fake python.sh";
+  const fs::path record = TempDir() / "fake_python.args";
+  std::ofstream(fake) << "#!/bin/sh\nprintf '%s\\n' \"$@\" > '" << record.string() << "'\n";
+  fs::permissions(fake, fs::perms::owner_all);
+  setenv("SCOOPSIM_PYTHON", fake.c_str(), 1);
+  EXPECT_EQ(sim::PythonInterpreter(), fake.string());
+  EXPECT_EQ(sim::ToolsDir(), std::string(SCOOPSIM_SOURCE_DIR) + "/tools");
+  EXPECT_TRUE(sim::RunPlotScript("plot_balovnev.py", {"a b.csv", "-o", "it's.png"}));
+  EXPECT_EQ(scoopsim_test::ReadText(record),
+            std::string(SCOOPSIM_SOURCE_DIR) + "/tools/plot_balovnev.py\na b.csv\n-o\nit's.png\n");
+  setenv("SCOOPSIM_PYTHON", "/bin/false", 1);
+  EXPECT_FALSE(sim::RunPlotScript("plot_balovnev.py", {"x.csv"}));
+  setenv("SCOOPSIM_PYTHON", "", 1);
+  EXPECT_EQ(sim::PythonInterpreter(), "python3");
+  unsetenv("SCOOPSIM_PYTHON");
+  EXPECT_EQ(sim::PythonInterpreter(), "python3");
+}
+
 // `study particle-size` end to end on the sphere scene (5 mm sand spheres) at 5 and 6 mm, two
 // beds each (four cases, ~3 s): the cases' files, DIR/size_study.csv (its '#' lines, header and
 // one row per size, the reference's MPE 0), the peaks in it against the case files read again
 // (sim::MakeSizeCurve, the default 0.05 s window; the CSV's 9 digits: relative 1e-8), the table,
 // the three PNGs; a second run (-o DIR/./) skips every case and writes the same CSV.
 TEST(SizeStudyTest, TwoSizesTwoBedsEndToEnd) {
+  UseTestPython();
   const std::string scene = WriteSphereScene();
   const fs::path dir = TempDir() / "size";
   const std::string stdout_file = (TempDir() / "size.txt").string();

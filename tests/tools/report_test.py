@@ -41,6 +41,9 @@ import plot_lookup_test
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 REPORT = os.path.join(ROOT, "tools", "report.py")
 WRAPPER = os.path.join(ROOT, "tools", "report.sh")
+# report.sh runs the scripts under $SCOOPSIM_PYTHON, else python3 on PATH: this Python, which has
+# numpy, h5py and matplotlib (a python3 first on PATH may lack them).
+WRAPPER_ENV = dict(os.environ, SCOOPSIM_PYTHON=sys.executable)
 BALOVNEV_COLUMNS = ("time", "pass", "rho", "tip_x", "tip_y", "tip_z", "surface", "depth",
                     "dem_horizontal", "dem_down", "balovnev_horizontal", "balovnev_vertical",
                     "plugin_horizontal", "plugin_vertical")
@@ -180,7 +183,8 @@ def main():
         root = os.path.join(tmp, "results")
         make_results(root)
         page_path = os.path.join(tmp, "report.html")
-        r = subprocess.run(["bash", WRAPPER, root, page_path], capture_output=True, text=True)
+        r = subprocess.run(["bash", WRAPPER, root, page_path], capture_output=True, text=True,
+                           env=WRAPPER_ENV)
         assert r.returncode == 0, r.stdout + r.stderr
         assert "9 figures" in r.stdout and "not run: none" in r.stdout, r.stdout
         with open(page_path, encoding="utf-8") as f:
@@ -217,7 +221,8 @@ def main():
 
         # Again: nothing is redrawn (the figures are newer than their inputs), the same page.
         mtime = os.path.getmtime(os.path.join(root, "lookup", "lookup_fig9.png"))
-        r = subprocess.run(["bash", WRAPPER, root, page_path], capture_output=True, text=True)
+        r = subprocess.run(["bash", WRAPPER, root, page_path], capture_output=True, text=True,
+                           env=WRAPPER_ENV)
         assert r.returncode == 0 and "plot_lookup" not in r.stdout + r.stderr, r.stdout + r.stderr
         assert os.path.getmtime(os.path.join(root, "lookup", "lookup_fig9.png")) == mtime
         with open(page_path, encoding="utf-8") as f:
