@@ -132,7 +132,7 @@ class PyWorld {
       throw py::value_error("World: driver: expected 'scene' or 'python', got " + driver_kind);
     }
     const bool needs_bed = !driver || driver->OwnStep() == 0;
-    world_ = std::make_unique<sim::World>(scene, threads);
+    world_ = std::make_unique<sim::World>(scene, threads > 0 ? threads : scene.threads);
     // As `scoopsim run` (RunOptions::adaptive_threads): fewer workers while timing shows fewer
     // are faster (a busy core); the same results either way.
     world_->mutable_system().set_adaptive_threads(adaptive_threads);
@@ -307,7 +307,8 @@ PYBIND11_MODULE(_scoopsim, m) {
       .def(py::init<sim::Scene, int, const std::string&, const py::object&, bool>(),
            py::arg("scene"), py::arg("threads") = 0, py::arg("driver") = "scene",
            py::arg("scoop_motion") = py::none(), py::arg("adaptive_threads") = true,
-           "threads 0: all cores. driver 'scene': the scene's own (path, arm); 'python': the "
+           "threads 0: the scene's `threads` (0 there: all cores), as the CLI. driver 'scene': the "
+           "scene's own (path, arm); 'python': the "
            "scoop where set_scoop_pose puts it, starting at scoop_motion (a tuple as "
            "scoop_motion() gives) or level above the bed's middle. adaptive_threads: as the CLI, "
            "fewer workers while they are faster (a busy core); the same results either way.")
