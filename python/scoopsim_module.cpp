@@ -54,6 +54,20 @@ std::vector<std::string> Sets(const py::object& overrides) {
   return sets;
 }
 
+// The scene as `scoopsim run` reads it: LoadScene with the overrides, then Preflight (what
+// follows from the values together and the files they name), an error about an override naming
+// the --set as the CLI's does (sim::NamingSet).
+sim::Scene Load(const std::string& path, const py::object& overrides) {
+  const std::vector<std::string> sets = Sets(overrides);
+  sim::Scene scene = sim::LoadScene(path, sets);
+  try {
+    sim::Preflight(&scene, sim::Work::kRun);
+  } catch (const sim::InputError& e) {
+    throw sim::NamingSet(e, sets);
+  }
+  return scene;
+}
+
 // While a long call runs in C++ with the GIL released (a pour, scoopsim.run), SIGINT and SIGTERM
 // go to the loop's own stop handlers (sim::InstallStopHandlers: the run closes its output and
 // stops); Python's handlers are put back afterwards, and a stop becomes KeyboardInterrupt.
@@ -294,12 +308,11 @@ PYBIND11_MODULE(_scoopsim, m) {
 
   m.def(
       "load_scene",
-      [](const std::string& path, const py::object& overrides) {
-        return sim::LoadScene(path, Sets(overrides));
-      },
+      [](const std::string& path, const py::object& overrides) { return Load(path, overrides); },
       py::arg("path"), py::arg("overrides") = py::none(),
-      "Loads and validates a scene; overrides as `--set KEY=VALUE` ({key: value} or a list of "
-      "'KEY=VALUE'). Raises scoopsim.InputError.");
+      "Loads and validates a scene as `scoopsim run` does (sim::LoadScene, then sim::Preflight: "
+      "the bed file, memory, the path against floor and walls, the arm's reach); overrides as "
+      "`--set KEY=VALUE` ({key: value} or a list of 'KEY=VALUE'). Raises scoopsim.InputError.");
 
   py::class_<PyWorld>(m, "World",
                       "The run loop (sim::World) set up as `scoopsim run` sets it up, without an "
@@ -399,8 +412,7 @@ PYBIND11_MODULE(_scoopsim, m) {
       "_run",
       [](const std::string& path, const std::string& out, const py::object& overrides, int threads,
          bool quiet, double stop_after) {
-        sim::Scene scene = sim::LoadScene(path, Sets(overrides));
-        sim::Preflight(&scene, sim::Work::kRun);
+        sim::Scene scene = Load(path, overrides);
         for (const std::string& w : scene.warnings)
           py::print("scoopsim: warning:", w,
                     py::arg("file") = py::module_::import("sys").attr("stderr"));
