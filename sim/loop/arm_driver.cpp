@@ -103,6 +103,8 @@ struct ArmDriver::Impl {
   int count = 0;
   arm::Wrench dem_wrench, contact_wrench;  // applied in the last Bullet step
   Eigen::VectorXd q_ref, qd_ref, demanded, applied;
+  bool external_ref = false;   // SetJointReference: follow external_q, not the path
+  Eigen::VectorXd external_q;  // [rad] (n)
   arm::JointServo servo;  // the PID's step with its D term implicit (arm.d_term: implicit)
   arm::ArmSample sample;
   uint64_t active = 0;             // fault conditions true at the last step
@@ -259,6 +261,11 @@ struct ArmDriver::Impl {
   void Reference(double t) {
     switch (mode) {
       case Mode::kFollow:
+        if (external_ref) {  // ArmDriver::SetJointReference
+          q_ref = external_q;
+          qd_ref.setZero();
+          break;
+        }
         Interpolate(*plan, t, &seg);
         break;
       case Mode::kHold:
@@ -613,6 +620,34 @@ std::vector<double> ArmDriver::JointPositions() const {
   const Eigen::VectorXd& q = impl_->bullet->q();
   return std::vector<double>(q.data(), q.data() + q.size());
 }
+
+void ArmDriver::SetJointReference(const std::vector<double>& q) {
+  if (static_cast<int>(q.size()) != impl_->n) {
+    throw std::invalid_argument("SetJointReference: expected " + std::to_string(impl_->n) +
+                                " joint positions, got " + std::to_string(q.size()));
+  }
+  impl_->external_q = Eigen::Map<const Eigen::VectorXd>(q.data(), impl_->n);
+  impl_->external_ref = true;
+}
+
+void ArmDriver::ClearJointReference() { impl_->external_ref = false; }
+
+ArmDriver::JointState ArmDriver::joint_state() const {
+  const Impl& a = *impl_;
+  JointState s;
+  if (!a.bullet) return s;
+  auto list = [](const Eigen::VectorXd& v) {
+    return std::vector<double>(v.data(), v.data() + v.size());
+  };
+  s.q = list(a.bullet->q());
+  s.qd = list(a.bullet->qd());
+  s.applied = list(a.applied);
+  s.reference = list(a.q_ref);
+  return s;
+}
+
+uint64_t ArmDriver::active_faults() const { return impl_->active; }
+uint64_t ArmDriver::latched_faults() const { return impl_->report.latched; }
 
 void ArmDriver::Finish(H5Output* out) {
   const ArmReport& r = impl_->report;

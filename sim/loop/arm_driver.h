@@ -94,6 +94,23 @@ class ArmDriver : public ScoopDriver {
   // Bullet's joint positions now [rad] (dof; empty before the first pass).
   std::vector<double> JointPositions() const;
 
+  // A controller outside the loop (the Python module's World.set_joint_reference): from the next
+  // Bullet step on, the joint PID follows `q` [rad] (dof entries) at zero rate instead of the
+  // path's IK, until ClearJointReference(); the fault reactions (stop: hold, retract) still take
+  // over, and a pass still ends at its path's planned end. Unused, the driver is unchanged.
+  void SetJointReference(const std::vector<double>& q);
+  void ClearJointReference();
+  // The last Bullet step's joint state (dof each; empty before the first pass): position [rad],
+  // velocity [rad/s], the applied (clamped) torque [N m], and the reference it followed [rad].
+  struct JointState {
+    std::vector<double> q, qd, applied, reference;
+  };
+  JointState joint_state() const;
+  // The fault conditions active at the last Bullet step and every flag latched so far
+  // (arm/fault_monitor.h's ArmFault bits).
+  uint64_t active_faults() const;
+  uint64_t latched_faults() const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -373,6 +373,9 @@ void World::EndPass() {
          1e3 * dig.rho, held.size(), mass);
 }
 
+const ScoopWrench* World::scoop_wrench() const { return dig_ ? &dig_->wrench : nullptr; }
+int World::scoop_mesh() const { return dig_ ? dig_->mesh : -1; }
+
 bool World::Done() const {
   if (dig_) return dig_->pass > scene_.dig.passes;
   return !(system_->time() < t_start_ + scene_.duration - 0.5 * scene_.time_step);

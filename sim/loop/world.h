@@ -149,6 +149,16 @@ class World {
   const dem::System& system() const { return *system_; }
   dem::System& mutable_system() { return *system_; }
   const DigSummary& dig_summary() const { return summary_; }
+  // The scoop's wrench of the last step about its CoM in the world, l_scoop and body frames
+  // (what the /scoop/ rows hold); nullptr without a dig.
+  const ScoopWrench* scoop_wrench() const;
+  // The scoop's mesh in system() (its pose and twist: system().mesh_motion(k)); -1 without a dig.
+  int scoop_mesh() const;
+  // Begins a plain run (no dig) as Run() does, for a caller that calls Step() itself (the Python
+  // module); does nothing once a dig or a plain run has begun.
+  void StartPlainRun() {
+    if (!dig_ && !started_) StartPlain();
+  }
   const Scene& scene() const { return scene_; }
 
  private:
