@@ -28,6 +28,16 @@ def test_datasets_by_name_with_units_and_frames(tmp_path, small_dig):
             assert run["scoop/pose"].attrs[k] == v
     assert run["scoop/pose"].attrs["quaternion_order"]
     assert run["scoop/force_world"].shape[1] == 3
+    # Units and frames from the layout (docs/outputs.md): every /scoop/ and /series/ dataset of
+    # the run has its units, each wrench its frame.
+    for name in run.keys():
+        if name.startswith(("scoop/", "series/")):
+            assert run[name].attrs.get("units"), name
+    for kind, unit in (("force", "N"), ("torque", "N m")):
+        for frame, named in (("body", "body"), ("scoop", "l_scoop"), ("world", "world")):
+            a = run[f"scoop/{kind}_{frame}"].attrs
+            assert (a["units"], a["frame"]) == (unit, named)
+    assert run["scoop/rho"].attrs["units"] == "m"
 
 
 def test_ctrl_c_stops_a_run_with_its_output_closed(tmp_path, small_dig):
