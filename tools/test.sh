@@ -2,7 +2,7 @@
 # Installs the dependencies, builds everything and runs the tests. Exit status: ctest's.
 #   tools/test.sh            release build in build/, every test (~5 min on a quiet 2-core machine)
 #   tools/test.sh --quick    the same build, every test but the `slow` ones (tests/slow_tests.txt,
-#                            each over ~2 s): under 2 minutes, for the edit-build-test loop
+#                            each over ~5 s): under 2 minutes, for the edit-build-test loop
 #   CI=true tools/test.sh    the `ci` preset (warnings as errors)
 #   tools/test.sh --help     this text
 set -euo pipefail
