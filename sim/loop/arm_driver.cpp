@@ -529,9 +529,13 @@ PassStart ArmDriver::BeginPass(int pass, const BedContext& bed) {
 dem::MeshMotion ArmDriver::MotionAt(double tau) {
   Impl& a = *impl_;
   const double half = 0.5 * a.dt;
+  // Bullet first: step Bullet up to tau, then hand the DEM the scoop where Bullet left it (the
+  // copy of a.cur comes after the loop: taken before it, the DEM got the pose one Bullet step
+  // old, FK(q - h qdot) instead of FK(q)).
+  if (a.spec.timing == CouplingTiming::kBulletFirst)
+    while (tau > a.t_b + half) a.Advance(*a.mesh);
   dem::MeshMotion m = a.cur;
   if (a.spec.timing == CouplingTiming::kBulletFirst) {
-    while (tau > a.t_b + half) a.Advance(*a.mesh);
     if (a.k > 1 && tau < a.t_b - half) {
       // Between two Bullet states: linear in position and velocity, normalised-linear in
       // orientation.

@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "arm/arm_model.h"
+#include "arm/kinematics.h"
 #include "sim/files/arm_geometry.h"
 #include "sim/files/bed_io.h"
 #include "sim/files/h5_output.h"
@@ -277,6 +278,10 @@ TEST(ArmDriverTest, SamePathByArmAndKinematicallyGivesTheSameWrench) {
 // The coupled nominal dig's DEM state hash at its end (issue 22's determinism golden, beside
 // tiny_dig's in tests/sim/world_test.cpp): the arm's controller, Bullet's step and the DEM all
 // feed it, so any change to one of them shows here. History (newest first):
+//   348ed918456f9404  2026-12-06  the DEM gets the scoop at Bullet's state after the step to the
+//                                 same time (FK(q)), no longer the one before it (FK(q - h qd),
+//                                 up to 2.8e-6 m off): ArmDriver::MotionAt took its copy of the
+//                                 Bullet state before stepping Bullet (DemGetsTheScoopAt...).
 //   c6302114fbd9bf8c  2026-12-03  the same on every x86-64 host: built without FMA and AVX-512
 //                                 and with scalar Eigen (top-level CMakeLists.txt). The old
 //                                 value held on the AVX-512 host it was pinned on; an AVX2 host
@@ -289,7 +294,7 @@ TEST(ArmDriverTest, SamePathByArmAndKinematicallyGivesTheSameWrench) {
 //                                 stays explicit coupled; implicit gave 31d96a7d5166f9b3;
 //                                 journal section 13).
 //   ad8b0ebb06884d63  2026-12-03  pinned (with tiny_dig's 3480ffbd08eaa986).
-constexpr uint64_t kNominalArmHash = 0xc6302114fbd9bf8cull;
+constexpr uint64_t kNominalArmHash = 0x348ed918456f9404ull;
 
 TEST(ArmDriverTest, CoupledDigIsDeterministicOnOneAndTwoThreadsAndRerun) {
   const sim::Scene scene = Scene("arm/nominal_snow.yaml");
@@ -438,6 +443,64 @@ TEST(ArmDriverTest, BoulderWithRetractLiftsTheScoop) {
   EXPECT_LT(std::hypot(rise.x, rise.y), 0.01);
   EXPECT_NEAR(time.back() - flag, length + scene.arm.stop_hold,
               scene.arm.substeps * scene.time_step + scene.time_step);
+}
+
+// Bullet first (the default timing): the DEM's step to tau gets the scoop where Bullet's step to
+// tau left it. The pose MotionAt hands the DEM is l_scoop by forward kinematics (arm::LinkPose,
+// a computation apart from Bullet's) at Bullet's joint positions after that call, to 1e-12 m in
+// position and 1e-12 in the quaternion (found ~1e-15), over the nominal dig's first 3000 steps
+// (0.11 s, the scoop accelerating to 0.05 m/s). The pose one Bullet step back, FK(q - h qd),
+// must be more than 1e-7 m off (a step at ~0.05 m/s is ~2e-6 m): the check tells a pose one
+// step old (the defect fixed on 2026-12-06) from the right one.
+TEST(ArmDriverTest, DemGetsTheScoopAtBulletsCurrentJointPositions) {
+  const sim::Scene scene = Scene("arm/nominal_snow.yaml");
+  ASSERT_EQ(scene.arm.timing, sim::CouplingTiming::kBulletFirst);
+  const arm::ArmModel model = arm::LoadArmModel(scene.arm.urdf);
+  sim::World world(scene, 1);
+  world.LoadBed(Bed(scene, "snow"));
+  class Checker : public Recorder {
+   public:
+    Checker(std::unique_ptr<sim::ArmDriver> arm, const arm::ArmModel& model, double h)
+        : Recorder(std::move(arm)), model_(model), h_(h) {}
+    dem::MeshMotion MotionAt(double tau) override {
+      const dem::MeshMotion m = Recorder::MotionAt(tau);
+      const auto* arm = static_cast<const sim::ArmDriver*>(inner());
+      const sim::ArmDriver::JointState s = arm->joint_state();
+      const std::vector<double>& b = arm->report().base;
+      Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
+      base.linear() = Eigen::AngleAxisd(b[3], Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      base.translation() = Eigen::Vector3d(b[0], b[1], b[2]);
+      const Eigen::VectorXd q = Eigen::Map<const Eigen::VectorXd>(s.q.data(), s.q.size());
+      const Eigen::VectorXd qd = Eigen::Map<const Eigen::VectorXd>(s.qd.data(), s.qd.size());
+      now = std::max(now, Off(arm::LinkPose(model_, q, "l_scoop", base), m.pose));
+      back = std::max(back, Off(arm::LinkPose(model_, q - h_ * qd, "l_scoop", base), m.pose));
+      return m;
+    }
+    double now = 0, back = 0;
+
+   private:
+    static double Off(const Eigen::Isometry3d& fk, const dem::Pose& p) {
+      const Eigen::Quaterniond q(fk.linear());
+      const double dq = std::min(
+          std::max({std::abs(q.w() - p.orientation.w), std::abs(q.x() - p.orientation.x),
+                    std::abs(q.y() - p.orientation.y), std::abs(q.z() - p.orientation.z)}),
+          std::max({std::abs(q.w() + p.orientation.w), std::abs(q.x() + p.orientation.x),
+                    std::abs(q.y() + p.orientation.y), std::abs(q.z() + p.orientation.z)}));
+      const Eigen::Vector3d t = fk.translation();
+      return std::max({dq, std::abs(t.x() - p.position.x), std::abs(t.y() - p.position.y),
+                       std::abs(t.z() - p.position.z)});
+    }
+    const arm::ArmModel& model_;
+    double h_;
+  };
+  auto checker = std::make_unique<Checker>(std::make_unique<sim::ArmDriver>(scene, false), model,
+                                           scene.arm.substeps * scene.time_step);
+  Checker* c = checker.get();
+  world.StartDig(std::move(checker));
+  for (int i = 0; i < 3000; ++i) ASSERT_TRUE(world.Step().ok());
+  std::printf("DEM's scoop pose vs FK(q): %.3g; vs FK(q - h qd): %.3g\n", c->now, c->back);
+  EXPECT_LT(c->now, 1e-12);
+  EXPECT_GT(c->back, 1e-7);
 }
 
 // A frame at the dig's start draws the torques holding the arm up (the PID's preloaded integral,

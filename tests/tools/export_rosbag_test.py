@@ -11,9 +11,10 @@
 - the base_link wrench: rotated back by Rz(arm_base_yaw) it is /scoop/force_world, torque_world
   (closed form, on a copy of the run given a yaw of 0.7 rad: the run's own yaw is 0);
 - the /tf chain world -> l_scoop (the URDF in Python) against /scoop/pose, the pose Bullet gave
-  the DEM (an independent oracle): /scoop/pose is l_scoop at the Bullet state one step h before
-  the row's q (semi-implicit Euler: q - h qd), h the first row's time minus start_time; to 1e-12 m
-  and 1e-12 in the quaternion (found 2e-15; the FK of q itself is ~3e-6 off: one step of motion);
+  the DEM (an independent oracle): with bullet_first timing the DEM's step to t uses the Bullet
+  state at t, so /scoop/pose is l_scoop at the row's own q, to 1e-12 m and 1e-12 in the
+  quaternion (found ~1e-15). The pose one step before (q - h qd, h the first row's time minus
+  start_time) must be off by more than 1e-7 m (found ~3e-6): the check tells the two apart;
 - the CLI writes the same bytes as the script;
 - a file without /arm/ gives one line naming the file and /arm/, exit 2."""
 
@@ -127,7 +128,7 @@ def check_tf(topics, f):
     h = f["scoop/time"][0] - f.attrs["start_time"]
     assert 1e-5 < h < 1e-4, h
     joints = str(f.attrs["arm_joints"]).split(",")
-    worst_bag = worst_step = 0.0
+    worst_bag = worst_pose = worst_back = 0.0
     for i, (msg, _) in enumerate(topics["/tf"]):
         moving = {(m.header.frame_id, m.child_frame_id): matrix(m.transform)
                   for m in msg.transforms}
@@ -135,19 +136,27 @@ def check_tf(topics, f):
         for name in chain:
             _, parent, child, _, _ = urdf.joints[name]
             m = m @ moving.get((parent, child), static.get((parent, child)))
-        # The bag's l_scoop (at q) against the Python chain at q - h qd against /scoop/pose.
+        # The bag's l_scoop and /scoop/pose against the Python chain at q; the chain one step
+        # back (q - h qd) against /scoop/pose, which must differ.
+        here = export_rosbag.link_pose(urdf, joints, q[i], static[("world", "base_link")],
+                                       "l_scoop")
         back = export_rosbag.link_pose(urdf, joints, q[i] - h * qd[i], static[("world",
                                                                                "base_link")],
                                        "l_scoop")
-        here = export_rosbag.link_pose(urdf, joints, q[i], static[("world", "base_link")],
-                                       "l_scoop")
         worst_bag = max(worst_bag, np.abs(m - here).max())
-        qq, qh = export_rosbag.quaternion(back[:3, :3]), pose[i, [4, 5, 6, 3]]
-        worst_step = max(worst_step, np.abs(back[:3, 3] - pose[i, :3]).max(),
-                         min(np.abs(qq - qh).max(), np.abs(qq + qh).max()))
-    print("tf: bag's chain vs FK(q) %.3g; FK(q - h qd) vs /scoop/pose %.3g (h %.6g s)"
-          % (worst_bag, worst_step, h))
-    assert worst_bag < 1e-12 and worst_step < 1e-12, (worst_bag, worst_step)
+        qh = pose[i, [4, 5, 6, 3]]
+        for fk, worst in ((here, "pose"), (back, "back")):
+            qq = export_rosbag.quaternion(fk[:3, :3])
+            off = max(np.abs(fk[:3, 3] - pose[i, :3]).max(),
+                      min(np.abs(qq - qh).max(), np.abs(qq + qh).max()))
+            if worst == "pose":
+                worst_pose = max(worst_pose, off)
+            else:
+                worst_back = max(worst_back, off)
+    print("tf: bag's chain vs FK(q) %.3g; FK(q) vs /scoop/pose %.3g; FK(q - h qd) vs /scoop/pose "
+          "%.3g (h %.6g s)" % (worst_bag, worst_pose, worst_back, h))
+    assert worst_bag < 1e-12 and worst_pose < 1e-12, (worst_bag, worst_pose)
+    assert worst_back > 1e-7, worst_back
 
 
 def main():
