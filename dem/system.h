@@ -6,8 +6,10 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "dem/bond.h"
 #include "dem/clump.h"
 #include "dem/material.h"
 #include "dem/mesh.h"
@@ -207,6 +209,19 @@ class System {
   const Clumps& clumps() const;
   Clumps& mutable_clumps();    // to restore a saved state; the spheres are not moved
   int64_t num_bodies() const;  // single spheres + clumps
+
+  // Breakable bonds between spheres (dem/bond.h), computed every step after the contacts, in
+  // parallel with them. AddBonds throws std::invalid_argument naming the first bond whose ids are
+  // unknown or equal, belong to one clump, or are bonded already. A broken bond stays in bonds()
+  // (intact = false) and never acts again. Removing a particle removes its bonds.
+  void AddBonds(const std::vector<Bond>& bonds);
+  const std::vector<Bond>& bonds() const;  // in the order added
+  int64_t intact_bond_count() const;
+  // The bonds broken since the last call, in the order they broke (within a step, bond order).
+  std::vector<BondBreak> TakeBondBreaks();
+  // Pairs of spheres (persistent ids, a < b, sorted) whose surfaces are closer than `gap` [m]
+  // (overlapping pairs included), not of one clump: where bonds may be made.
+  std::vector<std::pair<int64_t, int64_t>> PairsWithinGap(double gap) const;
 
   // Sleeping (SleepConfig); may be switched on and off between steps.
   void set_sleep(const SleepConfig& sleep);
