@@ -760,9 +760,8 @@ Command ExportRosbag(CLI::App* exporter) {
   command->add_option("-o,--output", args->out, "The bag to write (.bag)")->required();
   return {Given(command),
           [args] {
-            return sim::RunPlotScript("export_rosbag.py", {args->run, "-o", args->out})
-                       ? sim::kExitOk
-                       : kExitFailure;
+            const int status = sim::RunToolScript("export_rosbag.py", {args->run, "-o", args->out});
+            return status == 0 ? sim::kExitOk : status == 2 ? sim::kExitInput : kExitFailure;
           },
           nullptr};
 }

@@ -1,6 +1,7 @@
 #include "sim/studies/commands.h"
 
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -90,6 +91,10 @@ std::string ToolsDir() {
 }
 
 bool RunPlotScript(const std::string& script, const std::vector<std::string>& args) {
+  return RunToolScript(script, args) == 0;
+}
+
+int RunToolScript(const std::string& script, const std::vector<std::string>& args) {
   const auto quote = [](const std::string& text) {
     std::string q = "'";
     for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
@@ -97,12 +102,16 @@ bool RunPlotScript(const std::string& script, const std::vector<std::string>& ar
   };
   std::string command = quote(PythonInterpreter()) + " " + quote(ToolsDir() + "/" + script);
   for (const std::string& arg : args) command += " " + quote(arg);
-  if (std::system(command.c_str()) == 0) return true;
+  const int status = std::system(command.c_str());
+  if (status == 0) return 0;
+  // The script's own exit status (2: it refused its input, with its one line on stderr).
+  const int code = status > 0 && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (code == 2) return 2;
   std::fprintf(stderr,
-               "scoopsim: the plot failed: %s (the Python of SCOOPSIM_PYTHON, else python3 on "
+               "scoopsim: the script failed: %s (the Python of SCOOPSIM_PYTHON, else python3 on "
                "PATH, needs numpy, h5py and matplotlib)\n",
                command.c_str());
-  return false;
+  return 1;
 }
 
 void RefuseOutputOverInput(const std::string& output, const std::string& input,

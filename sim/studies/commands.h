@@ -39,6 +39,9 @@ std::string ToolsDir();
 // Runs PythonInterpreter() ToolsDir()/<script> with `args` (each quoted for the shell), as the
 // studies draw their figures; false (and a line on stderr naming the command) when it fails.
 bool RunPlotScript(const std::string& script, const std::vector<std::string>& args);
+// The same, returning 0 (done), 2 (the script refused its input: its one line is on stderr) or 1
+// (it failed otherwise, or Python could not run it: a line saying so).
+int RunToolScript(const std::string& script, const std::vector<std::string>& args);
 
 // `scoopsim bed SCENE -o BED.h5`: fill the scene's box, settle, save the bed.
 int MakeBed(const Scene& scene, const RunOptions& options);

@@ -16,7 +16,7 @@
   quaternion (found ~1e-15). The pose one step before (q - h qd, h the first row's time minus
   start_time) must be off by more than 1e-7 m (found ~3e-6): the check tells the two apart;
 - the CLI writes the same bytes as the script;
-- a file without /arm/ gives one line naming the file and /arm/, exit 2."""
+- a file without /arm/ gives one line naming the file and /arm/, exit 2 (the script and the CLI)."""
 
 import os
 import shutil
@@ -217,6 +217,12 @@ def main():
         expect_refused(export, [([plain, "-o", os.path.join(d, "x.bag")], plain + ": no /arm/"),
                                 ([os.path.join(d, "none.h5"), "-o", os.path.join(d, "x.bag")],
                                  "no such file")])
+        # The CLI passes the script's refusal on: exit 2, its line on stderr, nothing more.
+        cli = subprocess.run([binary, "export", "rosbag", plain, "-o", os.path.join(d, "y.bag")],
+                             capture_output=True, text=True)
+        assert cli.returncode == 2, (cli.returncode, cli.stderr)
+        assert cli.stderr.strip().splitlines() == [cli.stderr.strip()], cli.stderr
+        assert plain + ": no /arm/" in cli.stderr, cli.stderr
     print("export_rosbag: ok")
 
 
