@@ -54,9 +54,11 @@ SCOOP = ("time", "force_scoop", "torque_scoop", "force_world", "torque_world")
 # owl_msgs/ArmFaultsStatus as the lander's stack defines it (a Header and the uint64 bit set),
 # with the flag values of arm/fault_monitor.h as constants. Made at run time by genpy (no
 # catkin build): its md5 is that of this text, which a node built against the lander's own
-# owl_msgs has only if the constants' names there are these.
+# owl_msgs has only if the constants' names there are these. The lander's own code (nasa/
+# ow_simulator's ow_lander Python) uses ArmFaultsStatus.NONE, HARDWARE, TRAJECTORY_GENERATION,
+# COLLISION, E_STOP and NO_FORCE_DATA: NONE = 0 comes first, then the bits in order.
 FAULTS_TYPE = "owl_msgs/ArmFaultsStatus"
-FAULTS_TEXT = "Header header\nuint64 value\n" + "".join(
+FAULTS_TEXT = "Header header\nuint64 value\nuint64 NONE=0\n" + "".join(
     "uint64 %s=%d\n" % (name, bit) for bit, name in sorted(FLAGS.items()))
 
 
