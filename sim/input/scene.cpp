@@ -1239,6 +1239,11 @@ int SceneLine(const Scene& scene, const std::string& key) {
   return line;
 }
 
+std::string SceneNote(const Scene& scene, const std::string& key, const std::string& text) {
+  const std::string line = scene.path + ":" + std::to_string(SceneLine(scene, key)) + ": " + text;
+  return yaml_input::WarningNamingSet(line, scene.path, yaml_input::SetsOf(scene.yaml_text));
+}
+
 void RefuseArmScene(const Scene& scene, const std::string& command) {
   if (!scene.arm.enabled) return;
   // At the key's own line (SceneLine gives its value's: the line under it for a block map). The

@@ -251,6 +251,10 @@ InputError NamingSet(const InputError& error, const std::vector<std::string>& se
 // (sim/loop/preflight.h).
 int SceneLine(const Scene& scene, const std::string& key);
 
+// A line about the scene's key `key` (a note, not an error): "FILE:LINE: TEXT" at the key's line
+// (SceneLine), or "--set KEY=VALUE: TEXT" when an override wrote it.
+std::string SceneNote(const Scene& scene, const std::string& key, const std::string& text);
+
 // Refuses a scene with `arm:` for a command that digs kinematically (the scoop follows the dig's
 // path exactly: sweeps, the shape, particle-size and Balovnev studies): an InputError at the
 // scene's `arm` line naming `command`; an error about an `arm` a --set wrote names the --set.

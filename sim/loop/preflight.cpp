@@ -461,13 +461,13 @@ RunForecast Preflight(Scene* scene, Work work) {
   if (scene->bond_time_step > 0 && f.time_step * kCostlyBondStepRatio <= f.contact_time_step) {
     const double unbonded = f.simulated / f.contact_time_step;
     const double n = static_cast<double>(f.particles);
-    f.bond_note = scene->path + ":" + std::to_string(SceneLine(*scene, "bed.bonds.modulus")) +
-                  ": bed.bonds: the bonds' critical step " + Num(f.time_step) + " s is " +
-                  Num(f.contact_time_step / f.time_step) + " x smaller than the contact's " +
-                  Num(f.contact_time_step) + " s: about " + Num(f.steps) + " steps (" +
-                  Num(f.steps * n) + " particle-steps) against " + Num(unbonded) + " (" +
-                  Num(unbonded * n) +
-                  ") unbonded; a lower bed.bonds.modulus or a larger bed.radius costs less";
+    f.bond_note = SceneNote(
+        *scene, "bed.bonds.modulus",
+        "bed.bonds: the bonds' critical step " + Num(f.time_step) + " s is " +
+            Num(f.contact_time_step / f.time_step) + " x smaller than the contact's " +
+            Num(f.contact_time_step) + " s: about " + Num(f.steps) + " steps (" + Num(f.steps * n) +
+            " particle-steps) against " + Num(unbonded) + " (" + Num(unbonded * n) +
+            ") unbonded; a lower bed.bonds.modulus or a larger bed.radius costs less");
   }
   // The scene's own driver plans each pass once the run's length is known to be sane (above, on
   // the tool path's own length; an arm's plan samples its path every 10 ms): an arm's path out
