@@ -32,7 +32,7 @@ namespace sim {
 struct StrengthVsDepth {
   enum class Law { kConstant, kLinear, kExponential, kTable };
   Law law = Law::kConstant;    // constant: f = 1
-  double slope = 0;            // linear: f = max(0, 1 + slope d) [1/m]
+  double slope = 0;            // linear: f = max(0, 1 + slope d) [1/m]; f = 0: no bond
   double length = 0;           // exponential: f = exp(d / length) [m], length != 0 (< 0 weakens)
   std::vector<double> depth;   // table: points (depth [m] ascending, f >= 0), linear between,
   std::vector<double> factor;  //   held beyond the ends

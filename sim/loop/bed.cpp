@@ -172,7 +172,8 @@ std::vector<dem::Bond> MakeBedBonds(const dem::System& system, const BondSpec& s
     const double ra = p.radius[a], rb = p.radius[b];
     const dem::Vec3 point = p.x[a] + (ra + 0.5 * (distance - ra - rb)) / distance * d;
     const double f = BondStrengthFactor(spec.strength_vs_depth, surface - point.z);
-    // The strengths scaled here, not by MakeBond's factor: inf x 0 would be NaN.
+    if (!(f > 0)) continue;  // no cement where the law leaves no strength
+    // The strengths scaled here, not by MakeBond's factor, so that .inf stays .inf.
     dem::BondParams params = spec.params;
     const auto scaled = [f](double s) { return std::isinf(s) ? s : s * f; };
     params.tensile_strength = scaled(params.tensile_strength);

@@ -54,7 +54,8 @@ double BondSurface(const Scene& scene, const dem::Particles& particles);
 // (sorted) order, its three strengths scaled by BondStrengthFactor of the depth of its contact
 // point below `surface`. The contact point lies on the line of centres, halfway across the gap
 // (or the overlap) between the two surfaces: x_a + n (r_a + (|x_b - x_a| - r_a - r_b) / 2). A
-// strength of .inf stays infinite at any depth (a factor 0 included).
+// pair where f = 0 (the linear law past its zero, a table's 0) gets no bond; a strength of .inf
+// stays infinite at any depth.
 std::vector<dem::Bond> MakeBedBonds(const dem::System& system, const BondSpec& spec,
                                     double surface);
 
