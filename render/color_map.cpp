@@ -25,8 +25,8 @@ constexpr float kCategorical[8][3] = {
 }  // namespace
 
 bool ParseColorField(const std::string& name, ColorField* field) {
-  for (ColorField f :
-       {ColorField::kSpeed, ColorField::kDepth, ColorField::kMaterial, ColorField::kForce}) {
+  for (ColorField f : {ColorField::kSpeed, ColorField::kDepth, ColorField::kMaterial,
+                       ColorField::kForce, ColorField::kBrokenBonds}) {
     if (name == FieldName(f)) {
       *field = f;
       return true;
@@ -45,6 +45,8 @@ const char* FieldName(ColorField field) {
       return "material";
     case ColorField::kForce:
       return "force";
+    case ColorField::kBrokenBonds:
+      return "broken_bonds";
   }
   return "?";
 }
@@ -59,6 +61,8 @@ const char* FieldUnit(ColorField field) {
       return "";
     case ColorField::kForce:
       return "N";
+    case ColorField::kBrokenBonds:
+      return "";
   }
   return "";
 }
@@ -113,6 +117,11 @@ void ComputeField(const sim::WorldView& view, ColorField field, std::vector<floa
       }
       break;
     }
+    case ColorField::kBrokenBonds: {
+      const bool has = view.broken_bonds.size() == n;
+      for (size_t i = 0; i < n; ++i) out[i] = has ? view.broken_bonds[i] : 0.0f;
+      break;
+    }
   }
 }
 
@@ -122,6 +131,13 @@ void AutoRange::Update(ColorField field, const std::vector<float>& values) {
     const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
     min_ = std::min(min_, static_cast<double>(*lo));
     max_ = std::max(max_, static_cast<double>(*hi));
+    return;
+  }
+  if (field == ColorField::kBrokenBonds) {
+    // Counts: most particles have none, so the top, not a percentile.
+    min_ = 0;
+    max_ =
+        std::max({max_, static_cast<double>(*std::max_element(values.begin(), values.end())), 1.0});
     return;
   }
   // 99th percentile: a few fast outliers would otherwise squash every other colour.
@@ -173,6 +189,9 @@ void SceneColorRange(const sim::Scene& scene, ColorField field, double* min, dou
       *max = r > 0 ? mass * g * h / (2 * r) : 0.0;
       break;
     }
+    case ColorField::kBrokenBonds:
+      *max = 6;
+      break;
   }
   if (!(*max > *min)) *max = *min + 1;  // a degenerate scene: any non-empty range
 }

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "sim/files/arm_geometry.h"
-#include "sim/input/mesh_io.h"
 #include "sim/files/saved_run.h"
+#include "sim/input/mesh_io.h"
 
 namespace render {
 
@@ -36,6 +36,16 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
   }
 
   const sim::ArmSeries arm = run.Arm();
+  // A bonded run's broken bonds (/bonds/broken/): each snapshot's per-particle count is that of
+  // the records up to its time (the snapshots store no bonds).
+  const bool broken_field = frames->options().settings.color_by == ColorField::kBrokenBonds;
+  const sim::BondSeries bonds = broken_field ? run.Bonds() : sim::BondSeries();
+  const auto broken_counts = [&](double t, const dem::Particles& p) {
+    const int k = sim::SampleAt(bonds.broken_time, t) + 1;  // records at or before t
+    const std::vector<int64_t> a(bonds.broken_a.begin(), bonds.broken_a.begin() + k);
+    const std::vector<int64_t> b(bonds.broken_b.begin(), bonds.broken_b.begin() + k);
+    return sim::BrokenBondCounts(p.id, a, b);
+  };
 
   dem::Particles particles;
   // One colour range for the whole sequence: from every snapshot's field, unless given.
@@ -47,6 +57,7 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
       run.ReadSnapshot(snapshot, &particles);
       sim::WorldView view;
       view.particles = &particles;
+      if (broken_field) view.broken_bonds = broken_counts(snapshot.time, particles);
       ComputeField(view, field, &values);
       range.Update(field, values);
     }
@@ -77,6 +88,7 @@ int RenderSavedRun(const std::string& h5_path, FrameSequence* frames, bool quiet
     sim::WorldView view;
     view.time = snapshot.time;
     view.particles = &particles;
+    if (broken_field) view.broken_bonds = broken_counts(snapshot.time, particles);
     if (scene.has_gravity) view.gravity = scene.gravity;
     if (scene.has_box) {
       view.box_min = scene.box_min;

@@ -183,9 +183,10 @@ struct FramesArgs {
     command->add_flag("--video", video, "Also assemble DIR.mp4 with ffmpeg (when installed)");
     command
         ->add_option("--color-by", color_by,
-                     "speed|depth|material|force (force: run --frames only, snapshots store "
-                     "no forces; default: the scene's)")
-        ->check(CLI::IsMember({"speed", "depth", "material", "force"}));
+                     "speed|depth|material|force|broken_bonds (force: run --frames only, "
+                     "snapshots store no forces; broken_bonds: a bonded bed's; default: the "
+                     "scene's)")
+        ->check(CLI::IsMember({"speed", "depth", "material", "force", "broken_bonds"}));
     command->add_option("--color-range", color_range,
                         "LO,HI: the colour range of every frame (default: run: from the scene, "
                         "render: the whole run's)");
@@ -435,10 +436,11 @@ Command Check(CLI::App* parent) {
             const sim::RunForecast f = sim::Preflight(&scene, sim::Work::kRun);
             PrintWarnings(scene);
             std::printf(
-                "%s: ok: %lld particles, time step %.4g s, %.4g s simulated in about %.3g "
-                "steps, about %.3g MB of memory\n",
-                args->scene.c_str(), static_cast<long long>(f.particles), f.time_step, f.simulated,
-                f.steps, f.bytes / 1e6);
+                "%s: ok: %lld particles, time step %.4g s (%s rules), %.4g s simulated in about "
+                "%.3g steps, about %.3g MB of memory\n",
+                args->scene.c_str(), static_cast<long long>(f.particles), f.time_step,
+                f.time_step_rule, f.simulated, f.steps, f.bytes / 1e6);
+            if (!f.bond_note.empty()) std::printf("%s\n", f.bond_note.c_str());
             return 0;
           },
           SetsOf(args)};

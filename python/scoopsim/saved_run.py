@@ -45,6 +45,10 @@ _UNITS = {
     "arm/report/peak_torque": ("N m", "joint"), "arm/report/effort_limit": ("N m", "joint"),
     "arm/report/effort_derate": ("1", "joint"), "arm/report/margin": ("1", "joint"),
     "arm/report/saturation_time": ("s", "joint"),
+    "bonds/time": ("s", None), "bonds/intact": ("1", None),
+    "bonds/broken/time": ("s", None), "bonds/broken/pair": ("1 (persistent ids a < b)", None),
+    "bonds/broken/position": ("m", "world"), "bonds/broken/mode": ("1 (1 tension, 2 shear)", None),
+    "bonds/broken/stress": ("Pa", None),
 }
 for _kind, _unit in _SCOOP_WRENCH.items():
     for _frame in ("body", "scoop", "world"):

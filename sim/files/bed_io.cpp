@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -22,6 +24,12 @@ namespace {
 using h5::CheckId;
 using h5::CheckOk;
 using h5::Handle;
+
+// The bonds' datasets of a bed file (/bonds/NAME), scalars then vectors (see bed_io.h).
+constexpr const char* kBondScalars[9] = {"radius",           "kn",       "ks",
+                                         "tensile_strength", "cohesion", "tan_friction",
+                                         "damping_ratio",    "fn",       "mt"};
+constexpr const char* kBondVectors[3] = {"fs", "mb", "normal"};
 
 // The particle datasets of /particles that are hard links to the snapshot's (one copy on disk).
 const char* const kLinkedFields[] = {"id",     "position", "velocity", "angular_velocity",
@@ -123,6 +131,45 @@ void WriteClumps(hid_t file, const dem::System& system) {
 }
 
 // Writes everything but the sidecar into the new file `file`.
+// The bonds, intact and broken, with their state (see bed_io.h), in the system's order.
+void WriteBonds(hid_t file, const std::vector<dem::Bond>& bonds) {
+  const size_t n = bonds.size();
+  std::vector<int64_t> a(n), b(n);
+  std::vector<uint8_t> intact(n);
+  // Scalars, one column each: radius, kn, ks, tensile_strength, cohesion, tan_friction,
+  // damping_ratio, fn, mt.
+  std::vector<double> scalar(9 * n);
+  std::vector<double> vectors(9 * n);  // fs, mb, normal (3 columns each)
+  for (size_t k = 0; k < n; ++k) {
+    const dem::Bond& d = bonds[k];
+    a[k] = d.a;
+    b[k] = d.b;
+    intact[k] = d.intact ? 1 : 0;
+    const double s[9] = {d.radius,           d.kn,       d.ks,
+                         d.tensile_strength, d.cohesion, d.tan_friction,
+                         d.damping_ratio,    d.fn,       d.mt};
+    for (int j = 0; j < 9; ++j) scalar[j * n + k] = s[j];
+    const dem::Vec3 v[3] = {d.fs, d.mb, d.normal};
+    for (int j = 0; j < 3; ++j) {
+      vectors[j * 3 * n + 3 * k + 0] = v[j].x;
+      vectors[j * 3 * n + 3 * k + 1] = v[j].y;
+      vectors[j * 3 * n + 3 * k + 2] = v[j].z;
+    }
+  }
+  Handle group(CheckId(H5Gcreate2(file, "/bonds", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                       "H5Gcreate2 /bonds"),
+               H5Gclose);
+  h5::WriteArray(group.get(), "a", H5T_STD_I64LE, H5T_NATIVE_INT64, a.data(), n, 1);
+  h5::WriteArray(group.get(), "b", H5T_STD_I64LE, H5T_NATIVE_INT64, b.data(), n, 1);
+  h5::WriteArray(group.get(), "intact", H5T_STD_U8LE, H5T_NATIVE_UINT8, intact.data(), n, 1);
+  for (int j = 0; j < 9; ++j)
+    h5::WriteArray(group.get(), kBondScalars[j], H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
+                   scalar.data() + j * n, n, 1);
+  for (int j = 0; j < 3; ++j)
+    h5::WriteArray(group.get(), kBondVectors[j], H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
+                   vectors.data() + j * 3 * n, n, 3);
+}
+
 h5::SnapshotEntry WriteBed(hid_t file, const dem::System& system, const std::string& scene_yaml,
                            const PourPoint* pour) {
   const dem::Particles& p = system.particles();
@@ -179,6 +226,7 @@ h5::SnapshotEntry WriteBed(hid_t file, const dem::System& system, const std::str
   h5::WriteArray(group.get(), "shear", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, shear.data(), m, 3);
   group.reset();
   if (system.clumps().size() > 0) WriteClumps(file, system);
+  if (!system.bonds().empty()) WriteBonds(file, system.bonds());
 
   return entry;
 }
@@ -210,6 +258,57 @@ struct BedParticles {
   std::vector<int32_t> material;
   std::vector<std::string> names;
 };
+
+// The bonds of a bed file, their ids mapped by `new_id` (saved id -> id in the system; -1:
+// not in the bed), checked: ids in the bed, no NaN, strengths > 0 (+inf allowed).
+std::vector<dem::Bond> ReadBonds(const h5::Reader& in,
+                                 const std::function<int64_t(int64_t)>& new_id) {
+  std::vector<dem::Bond> bonds;
+  if (!in.Exists("/bonds")) return bonds;
+  int64_t n = 0;
+  const std::vector<int64_t> a =
+      in.Read<int64_t>("/bonds/a", H5T_INTEGER, H5T_NATIVE_INT64, -1, 1, &n);
+  const std::vector<int64_t> b = in.Read<int64_t>("/bonds/b", H5T_INTEGER, H5T_NATIVE_INT64, n, 1);
+  const std::vector<uint8_t> intact =
+      in.Read<uint8_t>("/bonds/intact", H5T_INTEGER, H5T_NATIVE_UINT8, n, 1);
+  std::vector<std::vector<double>> scalar(9);
+  for (int j = 0; j < 9; ++j) {
+    const std::string name = std::string("/bonds/") + kBondScalars[j];
+    scalar[j] = in.Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
+    for (int64_t k = 0; k < n; ++k) {
+      const double v = scalar[j][k];
+      // Strengths (columns 3, 4) may be +inf (never breaks); nothing may be NaN or -inf.
+      const bool ok = j == 3 || j == 4 ? v > 0 : std::isfinite(v);
+      if (!ok) in.Fail(name, "bond " + std::to_string(k) + ": " + Num(v));
+    }
+  }
+  std::vector<std::vector<dem::Vec3>> vectors(3);
+  for (int j = 0; j < 3; ++j) {
+    const std::string name = std::string("/bonds/") + kBondVectors[j];
+    vectors[j] = in.ReadVectors(name, n);
+    CheckFinite(in, name, vectors[j]);
+  }
+  bonds.resize(static_cast<size_t>(n));
+  for (int64_t k = 0; k < n; ++k) {
+    dem::Bond& d = bonds[k];
+    d.a = new_id(a[k]);
+    d.b = new_id(b[k]);
+    if (d.a < 0 || d.b < 0) {
+      in.Fail(d.a < 0 ? "/bonds/a" : "/bonds/b", "bond " + std::to_string(k) + ": particle " +
+                                                     std::to_string(d.a < 0 ? a[k] : b[k]) +
+                                                     " is not in the bed");
+    }
+    d.intact = intact[k] != 0;
+    double* fields[9] = {&d.radius,           &d.kn,       &d.ks,
+                         &d.tensile_strength, &d.cohesion, &d.tan_friction,
+                         &d.damping_ratio,    &d.fn,       &d.mt};
+    for (int j = 0; j < 9; ++j) *fields[j] = scalar[j][k];
+    d.fs = vectors[0][k];
+    d.mb = vectors[1][k];
+    d.normal = vectors[2][k];
+  }
+  return bonds;
+}
 
 // Reads and checks the particles' ids, centres, radii and materials: ids ascending, radii > 0,
 // centres finite and inside the box [lo, hi] (the floor and side walls hold every particle of a
@@ -576,6 +675,18 @@ void LoadBed(const std::string& path, dem::System* system) {
     records.push_back({new_id[slot_of(a[k])], new_b, shear[k]});
   }
   system->SetContacts(records);
+  // Bonds (a bonded bed), with their state, intact or broken.
+  const std::vector<dem::Bond> bonds = ReadBonds(in, [&](int64_t id) -> int64_t {
+    const int64_t slot = slot_of(id);
+    return slot < 0 ? -1 : new_id[slot];
+  });
+  if (!bonds.empty()) {
+    try {
+      system->AddBonds(bonds);
+    } catch (const std::invalid_argument& e) {
+      in.Fail("/bonds", e.what());
+    }
+  }
   system->set_time(time);
 }
 

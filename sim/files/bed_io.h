@@ -26,6 +26,13 @@
 //                      torque (the last step's, about the CoM) (C x 3); member int64: the
 //                      persistent ids of each clump's spheres (also in /particles), clump after
 //                      clump, in template order
+//   Only when the bed has bonds (issue 44, dem/bond.h; SaveBed writes them when the system has
+//   any, intact or broken; LoadBed adds them as they are):
+//   /bonds/            a, b int64 (B): persistent ids (a < b); intact uint8 (B): 1 intact, 0
+//                      broken for good; radius [m], kn, ks [Pa/m], tensile_strength, cohesion
+//                      [Pa] (+inf: never breaks), tan_friction, damping_ratio [-], fn [N]
+//                      (tension positive), mt [N m] (B); fs [N], mb [N m], normal [-] (B x 3),
+//                      world axes: dem::Bond's fields, in the system's bond order
 //   <name>.xdmf        sidecar next to <name>.h5
 #pragma once
 

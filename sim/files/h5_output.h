@@ -15,6 +15,10 @@
 //                           coordinates [m], triangles int64 (T x 3), part int32 (T), pose
 //                           (P x 7: each part's body -> world, x y z qw qx qy qz)
 //                           (sim/files/internal_h5.h, WriteSnapshotMeshes)
+//   /bonds/                 a bonded bed's (issue 44; docs/outputs.md "/bonds/"), written by
+//                           sim::World: time, intact (n) beside /series/; broken/time (m),
+//                           broken/pair uint64 (m x 2), broken/position (m x 3), broken/mode
+//                           uint64 (m: 1 tension, 2 shear), broken/stress (m) [Pa]
 //   <name>.xdmf             next to <name>.h5: XDMF3 temporal collection of the snapshots
 //                           ("particles", Polyvertex), and one of Triangle grids per mesh name;
 //                           written only when the file has snapshots

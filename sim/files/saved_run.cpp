@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sim/files/internal_h5.h"
@@ -125,6 +126,48 @@ ArmSeries SavedRun::Arm() const {
   a.fault_latched =
       in.Read<uint64_t>("/arm/fault_latched", H5T_NO_CLASS, H5T_NATIVE_UINT64, rows, 1);
   return a;
+}
+
+BondSeries SavedRun::Bonds() const {
+  const h5::Reader& in = impl_->in;
+  BondSeries s;
+  if (in.Exists("/bonds/time")) {
+    int64_t n = 0;
+    s.time = in.Read<double>("/bonds/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1, &n);
+    s.intact = in.Read<double>("/bonds/intact", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
+  }
+  if (!in.Exists("/bonds/broken/time")) return s;
+  int64_t m = 0;
+  s.broken_time = in.Read<double>("/bonds/broken/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1, &m);
+  const std::vector<uint64_t> pair =
+      in.Read<uint64_t>("/bonds/broken/pair", H5T_INTEGER, H5T_NATIVE_UINT64, m, 2);
+  for (int64_t k = 0; k < m; ++k) {
+    s.broken_a.push_back(static_cast<int64_t>(pair[2 * k]));
+    s.broken_b.push_back(static_cast<int64_t>(pair[2 * k + 1]));
+  }
+  s.broken_position = in.ReadVectors("/bonds/broken/position", m);
+  for (uint64_t mode :
+       in.Read<uint64_t>("/bonds/broken/mode", H5T_INTEGER, H5T_NATIVE_UINT64, m, 1))
+    s.broken_mode.push_back(static_cast<int>(mode));
+  s.broken_stress = in.Read<double>("/bonds/broken/stress", H5T_FLOAT, H5T_NATIVE_DOUBLE, m, 1);
+  return s;
+}
+
+std::vector<float> BrokenBondCounts(const std::vector<int64_t>& ids, const std::vector<int64_t>& a,
+                                    const std::vector<int64_t>& b) {
+  std::vector<float> counts(ids.size(), 0.0f);
+  std::vector<std::pair<int64_t, size_t>> index(ids.size());
+  for (size_t i = 0; i < ids.size(); ++i) index[i] = {ids[i], i};
+  std::sort(index.begin(), index.end());
+  const auto add = [&](int64_t id) {
+    const auto it = std::lower_bound(index.begin(), index.end(), std::make_pair(id, size_t{0}));
+    if (it != index.end() && it->first == id) counts[it->second] += 1.0f;
+  };
+  for (size_t k = 0; k < a.size() && k < b.size(); ++k) {
+    add(a[k]);
+    add(b[k]);
+  }
+  return counts;
 }
 
 std::vector<SnapshotMesh> SavedRun::ReadSnapshotMeshes(const SnapshotInfo& snapshot) const {

@@ -1,6 +1,7 @@
-// The one reader of a saved run: an OUT.h5 written by sim::H5Output (layout in sim/files/h5_output.h),
-// read back for `scoopsim render` and anyone else who wants a run's stored scene, its particle
-// snapshots or its scoop's series. Public header; the HDF5 C API stays inside sim/.
+// The one reader of a saved run: an OUT.h5 written by sim::H5Output (layout in
+// sim/files/h5_output.h), read back for `scoopsim render` and anyone else who wants a run's stored
+// scene, its particle snapshots or its scoop's series. Public header; the HDF5 C API stays inside
+// sim/.
 #pragma once
 
 #include <cstdint>
@@ -54,8 +55,31 @@ struct ArmSeries {
   bool empty() const { return time.empty() || joints.empty(); }
 };
 
-// A mesh stored with a snapshot (/snapshots/NNNNNN/meshes/<name>, sim/files/h5_output.h): the parts of
-// one role together, in world coordinates.
+// The bonds of a bonded run (/bonds/..., issue 44): the intact count over time and the bonds
+// that broke, one record each, in the order they broke. Empty for an unbonded run.
+struct BondSeries {
+  std::vector<double> time;    // [s] (n): the rows of /series/ (plain run) or /scoop/ (dig)
+  std::vector<double> intact;  // intact bonds then (n)
+  // The broken bonds (m records): end of the step each broke in [s], the two spheres'
+  // persistent ids (a < b), the contact point then [m], the mode (1 tension, 2 shear,
+  // dem::BondBreakMode) and the stress that broke it (sigma or tau) [Pa].
+  std::vector<double> broken_time;
+  std::vector<int64_t> broken_a, broken_b;
+  std::vector<dem::Vec3> broken_position;
+  std::vector<int> broken_mode;
+  std::vector<double> broken_stress;
+
+  bool empty() const { return time.empty() && broken_time.empty(); }
+};
+
+// How many broken bonds each particle has: counts[i] = the records k with a[k] or b[k] equal to
+// ids[i] (any order of ids; an id named by no record counts 0, a record's id not among ids is
+// skipped). As floats, for a colour field.
+std::vector<float> BrokenBondCounts(const std::vector<int64_t>& ids, const std::vector<int64_t>& a,
+                                    const std::vector<int64_t>& b);
+
+// A mesh stored with a snapshot (/snapshots/NNNNNN/meshes/<name>, sim/files/h5_output.h): the parts
+// of one role together, in world coordinates.
 struct SnapshotMesh {
   std::string name;        // "scoop", "arm", "obstacles"
   dem::TriangleMesh mesh;  // world coordinates [m]
@@ -94,6 +118,9 @@ class SavedRun {
   ScoopSeries Scoop() const;
   // The /arm/ series; empty when the run had no arm. InputError for a series of the wrong shape.
   ArmSeries Arm() const;
+  // The /bonds/ series and broken-bond records; empty for an unbonded run. InputError for a
+  // series or a record field whose length differs from its time's.
+  BondSeries Bonds() const;
   // The meshes stored with `snapshot` (none for a run without a dig, or written before them).
   // InputError for a mesh group of the wrong shape.
   std::vector<SnapshotMesh> ReadSnapshotMeshes(const SnapshotInfo& snapshot) const;

@@ -54,6 +54,9 @@ struct WorldView {
   std::string faults;             // the arm's latched fault flags by name ("" when none)
   dem::Vec3 box_min, box_max;     // bed container [m]
   dem::Vec3 gravity;              // [m/s^2]
+  // Broken bonds of each particle of *particles, in its order (a bonded bed, issue 44; render's
+  // colour field broken_bonds); empty without bonds.
+  std::vector<float> broken_bonds;
 };
 
 // Called by the run loop between steps (never while the DEM's OpenMP threads run).

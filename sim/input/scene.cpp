@@ -991,9 +991,10 @@ RenderSpec ParseRender(const std::string& path, const YAML::Node& node) {
   }
   if (r.Has("color_by")) {
     const YAML::Node f = node["color_by"];
-    const std::string expected = "one of speed, depth, material, force";
-    if (!f.IsScalar() || (f.Scalar() != "speed" && f.Scalar() != "depth" &&
-                          f.Scalar() != "material" && f.Scalar() != "force")) {
+    const std::string expected = "one of speed, depth, material, force, broken_bonds";
+    if (!f.IsScalar() ||
+        (f.Scalar() != "speed" && f.Scalar() != "depth" && f.Scalar() != "material" &&
+         f.Scalar() != "force" && f.Scalar() != "broken_bonds")) {
       Fail(path, LineOf(f), "render.color_by", expected, Describe(f));
     }
     spec.color_by = f.Scalar();
@@ -1063,6 +1064,106 @@ std::vector<dem::ClumpTemplate> ParseClumpTemplates(const std::string& file,
   return out;
 }
 
+// Breakable bonds (key bed.bonds; dem/bond.h). Defaults where a key is left out are those of the
+// reference's parallel bond: radius_multiplier 1 and stiffness_ratio 2.5 (Potyondy and Cundall
+// 2004, the parallel-bond parameters of their Lac du Bonnet granite model: lambda = 1,
+// k_n/k_s = 2.5), gap 0 and friction_angle 0 (PFC's linear parallel bond "with inactive
+// dashpots and a reference gap of zero corresponds with the parallel-bond model of
+// [Potyondy2004]", its friction angle pb_fa defaulting to 0: Itasca, PFC 9 manual, "Linear
+// Parallel Bond Model"), damping_ratio 0 (the reference's undamped bond), strength_vs_depth
+// constant. The modulus and the two strengths have no default: they are the material.
+// `.inf` is accepted for tensile_strength and cohesion alone (bonds that never break).
+void ParseBonds(const std::string& file, const YAML::Node& node, BedSpec* bed) {
+  const MapReader m(file, node, "bed.bonds",
+                    {"gap", "radius_multiplier", "modulus", "stiffness_ratio", "tensile_strength",
+                     "shear_strength", "damping_ratio", "strength_vs_depth"});
+  BondSpec& b = bed->bonds;
+  b.enabled = true;
+  dem::BondParams& p = b.params;
+  p.stiffness_ratio = 2.5;
+  // A strength: a number > 0 [Pa], or .inf (never breaks).
+  const auto strength = [&](const MapReader& map, const char* key) {
+    const std::string expected = "a number > 0 (Pa), or .inf for a bond that never breaks";
+    const YAML::Node v = map.Need(key, expected);
+    double x = 0;
+    if (v.IsScalar() && YAML::convert<double>::decode(v, x) && std::isinf(x) && x > 0) return x;
+    return map.CheckNumber(v, map.Key(key), expected, Positive);
+  };
+  // The gap is at most the bed's largest radius: bonds join neighbours, not spheres a grain apart.
+  b.gap = m.Number("gap", 0.0,
+                   "a number in [0, " + Num(bed->radius_max) + "] (m; bed's largest radius)",
+                   [&](double v) { return v >= 0 && v <= bed->radius_max; });
+  p.radius_multiplier = m.Number("radius_multiplier", 1.0,
+                                 "a number in (0, 1] (bond radius / smaller sphere's radius)",
+                                 [](double v) { return v > 0 && v <= 1; });
+  p.modulus = m.Number("modulus", "a number > 0 (Pa)", Positive);
+  p.stiffness_ratio =
+      m.Number("stiffness_ratio", p.stiffness_ratio, "a number > 0 (k_n / k_s)", Positive);
+  p.tensile_strength = strength(m, "tensile_strength");
+  const YAML::Node shear_node =
+      m.Need("shear_strength", "a map with keys cohesion (Pa), friction_angle (deg)");
+  const MapReader shear(file, shear_node, "bed.bonds.shear_strength",
+                        {"cohesion", "friction_angle"});
+  p.cohesion = strength(shear, "cohesion");
+  p.friction_angle = shear.Angle("friction_angle", 0.0, "a number in [0, 90) (deg)", [](double v) {
+    return v >= 0 && v < 90;
+  }) * kDeg;
+  p.damping_ratio = m.Number("damping_ratio", 0.0, "a number in [0, 1] (of critical)",
+                             [](double v) { return v >= 0 && v <= 1; });
+  if (!m.Has("strength_vs_depth")) return;
+  // constant, or {law: linear, slope}, {law: exponential, length}, {law: table, points}.
+  const YAML::Node law_node = node["strength_vs_depth"];
+  const std::string key = "bed.bonds.strength_vs_depth";
+  const std::string expected =
+      "constant, {law: linear, slope: 1/m}, {law: exponential, length: m} or {law: table, "
+      "points: [[depth m, factor], ...]}";
+  StrengthVsDepth& law = b.strength_vs_depth;
+  if (law_node.IsScalar()) {
+    if (law_node.Scalar() != "constant")
+      Fail(file, LineOf(law_node), key, expected, Describe(law_node));
+    return;
+  }
+  if (!law_node.IsMap() || !law_node["law"] || !law_node["law"].IsScalar())
+    Fail(file, LineOf(law_node), key, expected, Describe(law_node));
+  const std::string name = law_node["law"].Scalar();
+  if (name == "constant") {
+    MapReader(file, law_node, key, {"law"});
+  } else if (name == "linear") {
+    const MapReader l(file, law_node, key, {"law", "slope"});
+    law.law = StrengthVsDepth::Law::kLinear;
+    law.slope = l.Number("slope", "a number (1/m): f = max(0, 1 + slope x depth)",
+                         [](double) { return true; });
+  } else if (name == "exponential") {
+    const MapReader l(file, law_node, key, {"law", "length"});
+    law.law = StrengthVsDepth::Law::kExponential;
+    law.length = l.Number("length", "a number != 0 (m): f = exp(depth / length), < 0 weakens",
+                          [](double v) { return v != 0; });
+  } else if (name == "table") {
+    const MapReader l(file, law_node, key, {"law", "points"});
+    law.law = StrengthVsDepth::Law::kTable;
+    const std::string points_expected =
+        "a list of [depth, factor] pairs, depths >= 0 (m) strictly ascending, factors >= 0";
+    const YAML::Node points = l.Need("points", points_expected);
+    if (!points.IsSequence() || points.size() == 0)
+      Fail(file, LineOf(points), l.Key("points"), points_expected, Describe(points));
+    for (size_t i = 0; i < points.size(); ++i) {
+      const YAML::Node pt = points[i];
+      if (!pt.IsSequence() || pt.size() != 2)
+        Fail(file, LineOf(pt), l.Key("points"), points_expected, Describe(pt));
+      const double d = l.CheckNumber(pt[0], l.Key("points"), points_expected, NonNegative, &pt);
+      const double f = l.CheckNumber(pt[1], l.Key("points"), points_expected, NonNegative, &pt);
+      if (!law.depth.empty() && !(d > law.depth.back()))
+        Fail(file, LineOf(pt), l.Key("points"), points_expected, Describe(pt),
+             "depth not above the previous point's");
+      law.depth.push_back(d);
+      law.factor.push_back(f);
+    }
+  } else {
+    Fail(file, LineOf(law_node["law"]), key + ".law", "constant, linear, exponential or table",
+         Describe(law_node["law"]));
+  }
+}
+
 // The time step (paper eq. 4: a fraction of the Rayleigh time of the smallest sphere, a clump's
 // smallest sphere included) and the default skin, from the bed.
 void DeriveFromBed(Scene* scene) {
@@ -1073,7 +1174,16 @@ void DeriveFromBed(Scene* scene) {
     scene->skin = 0.5 * (bed.clump.empty() ? bed.radius_min : largest);
   }
   const dem::Material& material = scene->materials[scene->materials.Find(bed.material)];
-  scene->time_step = scene->rayleigh_fraction * dem::RayleighTimeStep(bed.radius_min, material);
+  scene->contact_time_step =
+      scene->rayleigh_fraction * dem::RayleighTimeStep(bed.radius_min, material);
+  scene->time_step = scene->contact_time_step;
+  // Bonds (issue 44): their springs' critical step at the smallest sphere, when smaller.
+  scene->bond_time_step = 0;
+  if (bed.bonds.enabled) {
+    scene->bond_time_step =
+        dem::BondCriticalStep(bed.radius_min, material.density, bed.bonds.params);
+    scene->time_step = std::min(scene->time_step, scene->bond_time_step);
+  }
 }
 
 // Sets the bed's clump template and the radii it implies (smallest sphere, bounding radius).
@@ -1129,6 +1239,11 @@ int SceneLine(const Scene& scene, const std::string& key) {
   return line;
 }
 
+std::string SceneNote(const Scene& scene, const std::string& key, const std::string& text) {
+  const std::string line = scene.path + ":" + std::to_string(SceneLine(scene, key)) + ": " + text;
+  return yaml_input::WarningNamingSet(line, scene.path, yaml_input::SetsOf(scene.yaml_text));
+}
+
 void RefuseArmScene(const Scene& scene, const std::string& command) {
   if (!scene.arm.enabled) return;
   // At the key's own line (SceneLine gives its value's: the line under it for a block map). The
@@ -1142,6 +1257,35 @@ void RefuseArmScene(const Scene& scene, const std::string& command) {
                              " digs kinematically: the scoop follows the dig's path exactly)",
                          "an arm", "run a scene with an arm with `scoopsim run`");
   throw NamingSet(error, yaml_input::SetsOf(scene.yaml_text));
+}
+
+double BondStrengthFactor(const StrengthVsDepth& law, double depth) {
+  const double d = std::max(depth, 0.0);
+  switch (law.law) {
+    case StrengthVsDepth::Law::kConstant:
+      return 1.0;
+    case StrengthVsDepth::Law::kLinear:
+      return std::max(0.0, 1.0 + law.slope * d);
+    case StrengthVsDepth::Law::kExponential:
+      return std::exp(d / law.length);
+    case StrengthVsDepth::Law::kTable: {
+      // Linear between the points, held beyond the ends.
+      const std::vector<double>& x = law.depth;
+      const std::vector<double>& y = law.factor;
+      if (x.empty()) return 1.0;
+      if (d <= x.front()) return y.front();
+      if (d >= x.back()) return y.back();
+      const size_t k = static_cast<size_t>(std::upper_bound(x.begin(), x.end(), d) - x.begin());
+      const double u = (d - x[k - 1]) / (x[k] - x[k - 1]);
+      return y[k - 1] + u * (y[k] - y[k - 1]);
+    }
+  }
+  return 1.0;
+}
+
+const char* TimeStepRule(const Scene& scene) {
+  return scene.bond_time_step > 0 && scene.bond_time_step < scene.contact_time_step ? "bond"
+                                                                                    : "contact";
 }
 
 std::vector<std::string> BuiltinClumpNames() {
@@ -1264,7 +1408,7 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
   const YAML::Node bed_node = top.Need("bed", "a map with keys material, radius, count");
   const MapReader bed(
       path, bed_node, "bed",
-      {"material", "radius", "count", "clump", "seed", "fill_fraction", "settle", "file"});
+      {"material", "radius", "count", "clump", "seed", "fill_fraction", "settle", "file", "bonds"});
   BedSpec& spec = scene.bed;
   spec.material = bed.String("material", "a material name");
   if (bed.Has("clump")) {
@@ -1316,6 +1460,7 @@ Scene ReadScene(const std::string& path, const std::string& yaml_text) {
   if (bed.Has("file")) {
     spec.file = ResolveAgainst(path, bed.String("file", "the path of a saved bed (.h5)"));
   }
+  if (bed.Has("bonds")) ParseBonds(path, bed_node["bonds"], &spec);
 
   // Container: floor and four side walls.
   const YAML::Node box_node = top.Need("box", "a map with keys min, max, wall_material");

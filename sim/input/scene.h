@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "dem/bond.h"
 #include "dem/clump.h"
 #include "dem/material.h"
 #include "dem/mesh.h"
@@ -22,6 +23,32 @@ struct ArmModel;  // arm/arm_model.h: sim keeps it behind a pointer (no Eigen in
 }
 
 namespace sim {
+
+// How a bond's strengths (tensile_strength and the shear strength's cohesion; not its friction
+// angle, not its stiffness) grow or fall with the depth d [m] of its contact point below the
+// bed's free surface (key bed.bonds.strength_vs_depth): f(d) multiplies them
+// (BondStrengthFactor). d < 0 (a point above
+// the measured surface, a grain standing proud) is taken as 0.
+struct StrengthVsDepth {
+  enum class Law { kConstant, kLinear, kExponential, kTable };
+  Law law = Law::kConstant;    // constant: f = 1
+  double slope = 0;            // linear: f = max(0, 1 + slope d) [1/m]; f = 0: no bond
+  double length = 0;           // exponential: f = exp(d / length) [m], length != 0 (< 0 weakens)
+  std::vector<double> depth;   // table: points (depth [m] ascending, f >= 0), linear between,
+  std::vector<double> factor;  //   held beyond the ends
+};
+
+// Breakable bonds made between the bed's spheres when a settled bed is loaded (key bed.bonds;
+// dem/bond.h, the parallel bond of Potyondy and Cundall 2004). Absent: an unbonded bed.
+struct BondSpec {
+  bool enabled = false;
+  double gap = 0;          // spheres whose surfaces are closer than this are bonded [m]
+  dem::BondParams params;  // strengths before the depth factor; SI (friction angle in rad)
+  StrengthVsDepth strength_vs_depth;
+};
+
+// f(d) of `law` at depth `depth` [m] below the bed's surface (d < 0 taken as 0) [-].
+double BondStrengthFactor(const StrengthVsDepth& law, double depth);
 
 // How the bed is made (fill + settle) or where a saved one is loaded from.
 struct BedSpec {
@@ -42,6 +69,7 @@ struct BedSpec {
                                       // resolved against the scene's folder); "" = make one
   double settled_height = 0;          // [m] derived: height of the bed once settled, estimated
                                       // at a solid fraction of 0.59 (LoadScene's box check)
+  BondSpec bonds;                     // bed.bonds: bonds made when the settled bed is loaded
 };
 
 struct OutputSpec {
@@ -94,7 +122,8 @@ struct RenderSpec {
   std::string camera_preset = "trench_oblique";  // one of kRenderCameraPresets; "" = explicit
   dem::Vec3 camera_position, camera_target;      // explicit camera [m] (camera: {position, ...})
   double fov_deg = 35;                           // vertical field of view [deg], in (0, 180)
-  std::string color_by = "speed";                // speed | depth | material | force
+  std::string color_by = "speed";                // speed | depth | material | force |
+                                                 // broken_bonds
   int width = 1280, height = 720;                // [px], each in [16, 4096]
   double every = 0;  // [s] between frames; 0: 0.05 s in a dig, else output.interval
 };
@@ -142,7 +171,7 @@ struct ArmSpec {
   // model effort x derate (arm::Derated), /arm/effort_limit holds the URDF's, /arm/effort_derate
   // this.
   std::vector<double> derate;
-  int substeps = 1;                          // DEM steps per Bullet step (averaged wrench)
+  int substeps = 1;  // DEM steps per Bullet step (averaged wrench)
   CouplingTiming timing = CouplingTiming::kBulletFirst;
   // The PID's D term (arm/controller.h): implicit (stable at any step; the default with
   // arm.wrench: table) or explicit (the default coupled to the DEM).
@@ -175,7 +204,11 @@ struct Scene {
   dem::MaterialTable materials;
   dem::Vec3 gravity{0, 0, -9.81};  // [m/s^2]
   double rayleigh_fraction = 0.2;  // dt / t_R, in (0, 0.3]
-  double time_step = 0;            // [s] derived: rayleigh_fraction * t_R(smallest radius)
+  double time_step = 0;            // [s] derived: rayleigh_fraction * t_R(smallest radius), or
+                                   // bond_time_step when that is smaller
+  double contact_time_step = 0;    // [s] derived: rayleigh_fraction * t_R(smallest radius)
+  double bond_time_step = 0;       // [s] derived: dem::BondCriticalStep(smallest radius, its
+                                   // density, bed.bonds); 0 without bed.bonds
   double skin = 0;                 // Verlet skin [m]; default 0.25 * smallest diameter (clumps:
                                    // 0.25 * the template's largest sphere diameter)
   bool skin_given = false;         // neighbor.skin was set (else the default above)
@@ -218,6 +251,10 @@ InputError NamingSet(const InputError& error, const std::vector<std::string>& se
 // (sim/loop/preflight.h).
 int SceneLine(const Scene& scene, const std::string& key);
 
+// A line about the scene's key `key` (a note, not an error): "FILE:LINE: TEXT" at the key's line
+// (SceneLine), or "--set KEY=VALUE: TEXT" when an override wrote it.
+std::string SceneNote(const Scene& scene, const std::string& key, const std::string& text);
+
 // Refuses a scene with `arm:` for a command that digs kinematically (the scoop follows the dig's
 // path exactly: sweeps, the shape, particle-size and Balovnev studies): an InputError at the
 // scene's `arm` line naming `command`; an error about an `arm` a --set wrote names the --set.
@@ -228,6 +265,10 @@ void RefuseArmScene(const Scene& scene, const std::string& command);
 // it for a bed still to be poured; Preflight for `scoopsim bed` of a scene that names a bed.file
 // (a run loads the file, whose own radii and count are checked instead).
 void CheckBedFitsTheBox(const Scene& scene);
+
+// Which rule sets the scene's time step: "contact" (rayleigh_fraction x t_R) or "bond"
+// (dem::BondCriticalStep, smaller).
+const char* TimeStepRule(const Scene& scene);
 
 // The built-in clump templates' names (dem::TetrahedronTemplates), in order.
 std::vector<std::string> BuiltinClumpNames();

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "dem/insertion.h"
+#include "sim/loop/dig.h"
 
 namespace sim {
 
@@ -140,6 +141,46 @@ SettleReport FillAndSettle(const Scene& scene, dem::System* system, const Settle
     if (!settle(t_fall, bed.settle_max_time)) break;
   }
   return total;
+}
+
+double BondSurface(const Scene& scene, const dem::Particles& particles) {
+  if (scene.dig.enabled && scene.dig.surface_given) return scene.dig.surface;
+  const double r_max = scene.bed.radius_max;
+  const dem::Vec3 margin{4 * r_max, 4 * r_max, 0};
+  return BedSurface(particles, scene.box_min + margin, scene.box_max - margin, 4 * r_max);
+}
+
+std::vector<dem::Bond> MakeBedBonds(const dem::System& system, const BondSpec& spec,
+                                    double surface) {
+  std::vector<dem::Bond> bonds;
+  if (!spec.enabled) return bonds;
+  const dem::Particles& p = system.particles();
+  // Storage index of each persistent id (ids ascending with their index).
+  std::vector<std::pair<int64_t, size_t>> index(p.size());
+  for (size_t i = 0; i < p.size(); ++i) index[i] = {p.id[i], i};
+  std::sort(index.begin(), index.end());
+  const auto find = [&](int64_t id) {
+    const auto it = std::lower_bound(index.begin(), index.end(), std::make_pair(id, size_t{0}));
+    return it->second;
+  };
+  const std::vector<std::pair<int64_t, int64_t>> pairs = system.PairsWithinGap(spec.gap);
+  bonds.reserve(pairs.size());
+  for (const auto& [ida, idb] : pairs) {
+    const size_t a = find(ida), b = find(idb);
+    const dem::Vec3 d = p.x[b] - p.x[a];
+    const double distance = dem::Norm(d);
+    const double ra = p.radius[a], rb = p.radius[b];
+    const dem::Vec3 point = p.x[a] + (ra + 0.5 * (distance - ra - rb)) / distance * d;
+    const double f = BondStrengthFactor(spec.strength_vs_depth, surface - point.z);
+    if (!(f > 0)) continue;  // no cement where the law leaves no strength
+    // The strengths scaled here, not by MakeBond's factor, so that .inf stays .inf.
+    dem::BondParams params = spec.params;
+    const auto scaled = [f](double s) { return std::isinf(s) ? s : s * f; };
+    params.tensile_strength = scaled(params.tensile_strength);
+    params.cohesion = scaled(params.cohesion);
+    bonds.push_back(dem::MakeBond(ida, ra, idb, rb, distance, params, 1.0));
+  }
+  return bonds;
 }
 
 }  // namespace sim

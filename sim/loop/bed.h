@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "dem/system.h"
 #include "sim/files/bed_io.h"
@@ -41,5 +42,21 @@ SettleReport FillAndSettle(const Scene& scene, dem::System* system, const Settle
 // threshold) or `max_time` of simulated time has passed.
 SettleReport Settle(dem::System* system, double mean_ke, double min_time, double max_time,
                     const SettleObserver& observe, int64_t check_every = 200);
+
+// Bonds (issue 44, key bed.bonds; dem/bond.h).
+//
+// The bed's free surface the bonds' depths are measured from [m]: dig.surface when the scene
+// gives it, else the surface the dig would measure (sim/loop/dig.h BedSurface over the box less
+// 4 r_max at each wall, columns of 4 r_max), so bond depth and bite depth share one datum.
+double BondSurface(const Scene& scene, const dem::Particles& particles);
+
+// The bonds bed.bonds makes in `system`: one per dem::System::PairsWithinGap(gap) pair, in its
+// (sorted) order, its three strengths scaled by BondStrengthFactor of the depth of its contact
+// point below `surface`. The contact point lies on the line of centres, halfway across the gap
+// (or the overlap) between the two surfaces: x_a + n (r_a + (|x_b - x_a| - r_a - r_b) / 2). A
+// pair where f = 0 (the linear law past its zero, a table's 0) gets no bond; a strength of .inf
+// stays infinite at any depth.
+std::vector<dem::Bond> MakeBedBonds(const dem::System& system, const BondSpec& spec,
+                                    double surface);
 
 }  // namespace sim

@@ -56,6 +56,7 @@ struct FileBed {
   int64_t count = 0;
   double radius_min = 0, radius_max = 0;  // [m]
   double time_step = 0;                   // [s]
+  double contact_time_step = 0;           // [s] the same without the bonds' step
   double surface = 0;                     // as World::StartDig measures it [m]
   double top = 0;                         // highest particle top [m]
 };
@@ -126,8 +127,8 @@ DeepestOverlap FindDeepestOverlap(const dem::System& system) {
   return deepest;
 }
 
-// Step 1: bed.file loaded (and so checked, sim/files/bed_io.h) into a system of the scene's model, its
-// radii checked against the scene's; its surface and top measured.
+// Step 1: bed.file loaded (and so checked, sim/files/bed_io.h) into a system of the scene's model,
+// its radii checked against the scene's; its surface and top measured.
 FileBed CheckBedFile(Scene* scene) {
   BedSpec& bed = scene->bed;
   std::error_code ec;
@@ -178,10 +179,12 @@ FileBed CheckBedFile(Scene* scene) {
     }
   }
   f.time_step = scene->time_step;
+  f.contact_time_step = scene->contact_time_step;
   for (size_t m = 0; m < used.size(); ++m) {
     if (!used[m]) continue;
     const double t = dem::RayleighTimeStep(lo, scene->materials[static_cast<int>(m)]);
     f.time_step = std::min(f.time_step, scene->rayleigh_fraction * t);
+    f.contact_time_step = std::min(f.contact_time_step, scene->rayleigh_fraction * t);
   }
   // Its state: no sphere faster than its own radius a step (it would jump through a neighbour),
   // no two bodies overlapping past health.max_overlap (the run would stop at its first step,
@@ -342,16 +345,32 @@ std::string TimeStepInputs(const Scene& scene) {
 
 }  // namespace
 
+std::string TimeStepLine(const Scene& scene) {
+  std::string line = "time step " + Num(scene.time_step, 4) + " s, set by the ";
+  if (std::string(TimeStepRule(scene)) == "bond") {
+    return line + "bonds (dem::BondCriticalStep of bed.bonds at the smallest sphere, " +
+           Num(scene.bond_time_step, 4) + " s < " + TimeStepInputs(scene) + ", " +
+           Num(scene.contact_time_step, 4) + " s)";
+  }
+  line += "contact (" + TimeStepInputs(scene) + ")";
+  if (scene.bond_time_step > 0)
+    line += "; the bonds' critical step is " + Num(scene.bond_time_step, 4) + " s";
+  return line;
+}
+
 RunForecast Preflight(Scene* scene, Work work) {
   BedSpec& bed = scene->bed;
   RunForecast f;
   const bool from_file = work == Work::kRun && !bed.file.empty();
   FileBed file;
+  f.contact_time_step = scene->contact_time_step;
   if (from_file) {
     file = CheckBedFile(scene);
     scene->time_step = file.time_step;
+    f.contact_time_step = file.contact_time_step;
   }
   f.time_step = scene->time_step;
+  f.time_step_rule = TimeStepRule(*scene);
   // `scoopsim bed` pours bed.count whatever bed.file says (LoadScene left it to here).
   if (work == Work::kBed && !bed.file.empty()) CheckBedFitsTheBox(*scene);
 
@@ -436,6 +455,19 @@ RunForecast Preflight(Scene* scene, Work work) {
            finite ? "about " + Num(f.steps) + " " + step + " for " + Num(f.simulated) +
                         " s simulated: the run could never end"
                   : "its planned time has no end");
+  }
+  // A bond that forces a step 10x or more smaller than the contact's (issue 44): its cost, the
+  // steps and particle-steps against the unbonded run's.
+  if (scene->bond_time_step > 0 && f.time_step * kCostlyBondStepRatio <= f.contact_time_step) {
+    const double unbonded = f.simulated / f.contact_time_step;
+    const double n = static_cast<double>(f.particles);
+    f.bond_note = SceneNote(
+        *scene, "bed.bonds.modulus",
+        "bed.bonds: the bonds' critical step " + Num(f.time_step) + " s is " +
+            Num(f.contact_time_step / f.time_step) + " x smaller than the contact's " +
+            Num(f.contact_time_step) + " s: about " + Num(f.steps) + " steps (" + Num(f.steps * n) +
+            " particle-steps) against " + Num(unbonded) + " (" + Num(unbonded * n) +
+            ") unbonded; a lower bed.bonds.modulus or a larger bed.radius costs less");
   }
   // The scene's own driver plans each pass once the run's length is known to be sane (above, on
   // the tool path's own length; an arm's plan samples its path every 10 ms): an arm's path out

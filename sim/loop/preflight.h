@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "sim/input/scene.h"
 
@@ -27,15 +28,25 @@ constexpr double kMaxSteps = 1e10;
 // particles; the particle arrays, neighbour and contact lists, the snapshot buffers), rounded up.
 constexpr double kBytesPerParticle = 1024;
 
+// `scoopsim check` reports bonds whose critical step is this many times smaller than the
+// contact's, or more (issue 44).
+constexpr double kCostlyBondStepRatio = 10;
+
 // The run as Preflight foresees it.
 struct RunForecast {
   int64_t particles = 0;  // spheres at the start (a clump bed: clumps x spheres per clump)
   double time_step = 0;   // [s]
   double simulated = 0;   // simulated time: settling (up to bed.settle.max_time) and the run [s]
   double steps = 0;       // simulated / time_step
-  double bytes = 0;       // memory the particles need, estimated [B]
-  double memory = 0;      // physical memory of this machine [B]
-  double surface = 0;     // world z of the bed's free surface (a dig) [m]
+  double contact_time_step = 0;  // [s] the step without the bonds (rayleigh_fraction x t_R)
+  const char* time_step_rule = "contact";  // "contact" or "bond" (sim::TimeStepRule)
+  // One line ("FILE:LINE: bed.bonds: ...") when the bonds force a step kCostlyBondStepRatio or
+  // more times smaller than the contact's: both steps and the run's steps and particle-steps
+  // against the unbonded run's. "" otherwise.
+  std::string bond_note;
+  double bytes = 0;                // memory the particles need, estimated [B]
+  double memory = 0;               // physical memory of this machine [B]
+  double surface = 0;              // world z of the bed's free surface (a dig) [m]
   bool surface_estimated = false;  // from bed.count (a bed still to be poured), else measured or
                                    // given (dig.surface)
 };
@@ -52,5 +63,9 @@ struct RunForecast {
 //     inside the side walls. The surface is given, measured on bed.file, or estimated from
 //     bed.count; World::StartDig places the passes on the measured one.
 RunForecast Preflight(Scene* scene, Work work);
+
+// One line on the scene's time step and the rule that set it: "time step 1.2e-07 s, set by the
+// bonds (... < ...)" or "..., set by the contact (time_step.rayleigh_fraction ...)".
+std::string TimeStepLine(const Scene& scene);
 
 }  // namespace sim

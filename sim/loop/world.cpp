@@ -10,6 +10,7 @@
 
 #include "dem/archive.h"
 #include "sim/files/bed_io.h"
+#include "sim/files/saved_run.h"
 #include "sim/input/exit_status.h"
 #include "sim/loop/progress.h"
 
@@ -66,6 +67,22 @@ World::~World() = default;
 void World::LoadBed(const std::string& path) {
   sim::LoadBed(path, system_.get());
   system_->Canonicalize();
+  BondBed();
+}
+
+int64_t World::BondBed() {
+  if (!scene_.bed.bonds.enabled || !system_->bonds().empty()) return 0;
+  const double surface = BondSurface(scene_, system_->particles());
+  const std::vector<dem::Bond> bonds = MakeBedBonds(*system_, scene_.bed.bonds, surface);
+  system_->AddBonds(bonds);
+  const size_t spheres = system_->particles().size();
+  Status(
+      "scoopsim: bonds: %zu made within a gap of %.4g m (%.3g per sphere; bond depths from "
+      "the surface at z = %.6g m)\n",
+      bonds.size(), scene_.bed.bonds.gap,
+      spheres > 0 ? 2.0 * static_cast<double>(bonds.size()) / static_cast<double>(spheres) : 0.0,
+      surface);
+  return static_cast<int64_t>(bonds.size());
 }
 
 void World::LoadState(const std::string& path) {
@@ -179,6 +196,10 @@ void World::OpenOutput(const std::string& path, const OutputCursor* resume) {
   owned_out_ = std::make_unique<H5Output>(path, scene_.yaml_text, SCOOPSIM_VERSION,
                                           scene_.output.flush_seconds, resume);
   out_ = owned_out_.get();
+  // The step and the rule that set it (issue 44: a bond may force a smaller one than the
+  // contact's rayleigh_fraction x t_R).
+  out_->SetAttribute("time_step", scene_.time_step);
+  out_->SetAttribute("time_step_rule", std::string(TimeStepRule(scene_)));
 }
 
 template <typename Archive>
@@ -404,6 +425,32 @@ void World::RecordPlainRow() {
     forces.insert(forces.end(), {f.x, f.y, f.z});
   }
   out_->AppendRow("/series/wall_force", forces.data(), static_cast<int>(forces.size()));
+  RecordBondRow();
+}
+
+void World::RecordBondRow() {
+  if (system_->bonds().empty()) return;
+  const double t = system_->time();
+  const double intact = static_cast<double>(system_->intact_bond_count());
+  out_->AppendRow("/bonds/time", &t, 1);
+  out_->AppendRow("/bonds/intact", &intact, 1);
+}
+
+void World::RecordBondBreaks() {
+  if (system_->bonds().empty()) return;
+  // Taken every step, written or not, so that none waits in the system (a checkpoint then holds
+  // none pending) and the live view's counts come from bonds() alone.
+  const std::vector<dem::BondBreak> breaks = system_->TakeBondBreaks();
+  if (!out_) return;
+  for (const dem::BondBreak& k : breaks) {
+    const uint64_t pair[2] = {static_cast<uint64_t>(k.a), static_cast<uint64_t>(k.b)};
+    const uint64_t mode = static_cast<uint64_t>(k.mode);
+    out_->AppendRow("/bonds/broken/time", &k.time, 1);
+    out_->AppendRow("/bonds/broken/pair", pair, 2);
+    Row3(out_, "/bonds/broken/position", k.position);
+    out_->AppendRow("/bonds/broken/mode", &mode, 1);
+    out_->AppendRow("/bonds/broken/stress", &k.stress, 1);
+  }
 }
 
 void World::RecordDigRow() {
@@ -443,6 +490,7 @@ void World::RecordDigRow() {
   out_->AppendRow("/series/awake", &awake, 1);
   const double ke = system_->KineticEnergy();
   out_->AppendRow("/series/kinetic_energy", &ke, 1);
+  RecordBondRow();
   dig.driver->Record(out_, t);
 }
 
@@ -525,6 +573,7 @@ dem::StepStatus World::Step() noexcept {
 
 void World::Record() {
   dem::System& system = *system_;
+  RecordBondBreaks();
   if (!dig_) {
     // A plain run: a /series/ row every output.interval.
     if (out_ && system.time() >= next_row_) {
@@ -583,6 +632,15 @@ WorldView World::View() const {
   view.box_min = scene_.box_min;
   view.box_max = scene_.box_max;
   view.gravity = scene_.gravity;
+  if (!system_->bonds().empty()) {
+    std::vector<int64_t> a, b;
+    for (const dem::Bond& bond : system_->bonds()) {
+      if (bond.intact) continue;
+      a.push_back(bond.a);
+      b.push_back(bond.b);
+    }
+    view.broken_bonds = BrokenBondCounts(system_->particles().id, a, b);
+  }
   if (dig_) {
     view.pass = std::min(dig_->pass, scene_.dig.passes);
     view.rho = dig_->rho;

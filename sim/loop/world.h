@@ -94,7 +94,13 @@ class World {
 
   // The bed: a saved one (storage canonicalised), or poured and settled now with a progress line
   // (returns kExitOk, kExitNotSettled with the bed kept, kExitUnstable or kExitStopped).
+  // A bed made with bed.bonds gets its bonds here (BondBed) when the file holds none.
   void LoadBed(const std::string& path);
+  // Makes the scene's bonds (bed.bonds, sim::MakeBedBonds at sim::BondSurface) in a bed that has
+  // none, and prints one line (how many, the mean per sphere); returns how many it made. A bed
+  // that has bonds (a saved bonded bed, a checkpoint) keeps them as they are; a scene without
+  // bed.bonds makes none. RunScene calls it after a pour.
+  int64_t BondBed();
   // A saved mid-run state (bench step): loaded, the scene's sleep settings applied to its sleep
   // flags, then the storage made canonical, so a plain run continues it with no further rebuild.
   void LoadState(const std::string& path);
@@ -164,11 +170,13 @@ class World {
  private:
   struct Dig;
   void StartPlain();
-  void PlanSnapshots();  // tells the output how many snapshots the planned run makes
+  void PlanSnapshots();       // tells the output how many snapshots the planned run makes
   int64_t StepsDone() const;  // loop steps since the run (plain or dig) began
-  void Record();         // the rows, snapshots and pass changes that follow a step (may throw)
+  void Record();              // the rows, snapshots and pass changes that follow a step (may throw)
   void RecordPlainRow();
   void RecordDigRow();
+  void RecordBondRow();     // /bonds/time and /bonds/intact (a bonded bed, beside /series/ rows)
+  void RecordBondBreaks();  // the step's broken bonds to /bonds/broken/ (taken every step)
   void BeginPass();
   void EndPass();
   void AddObstacles();  // scene.obstacles as fixed meshes (at StartDig)

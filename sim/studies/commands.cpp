@@ -22,6 +22,7 @@
 #include "sim/input/exit_status.h"
 #include "sim/loop/arm_driver.h"
 #include "sim/loop/bed.h"
+#include "sim/loop/preflight.h"
 #include "sim/loop/progress.h"
 #include "sim/loop/world.h"
 
@@ -180,6 +181,9 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   const bool needs_bed = !driver || driver->OwnStep() == 0;
   World world(scene, options.threads);
   world.mutable_system().set_adaptive_threads(options.adaptive_threads);
+  // Bonds may force a smaller step than the contact's (issue 44): say which one rules.
+  if (scene.bed.bonds.enabled && !options.quiet)
+    Status("scoopsim: %s\n", TimeStepLine(scene).c_str());
   if (options.resume) {
     const Checkpoint checkpoint = ReadCheckpoint(restart);
     if (checkpoint.scene_yaml != scene.yaml_text) {
@@ -200,6 +204,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
         SettleReport r;
         const int status = world.Pour(options.quiet, &r);
         if (status != kExitOk) return status;
+        world.BondBed();  // bed.bonds: the settled bed's bonds (LoadBed makes them for a file)
       }
     }
     if (driver) world.StartDig(std::move(driver));

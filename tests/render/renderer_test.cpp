@@ -177,6 +177,49 @@ TEST(RendererTest, ColoursFollowTheColourMap) {
   EXPECT_NEAR(c.b, 255 * 0.550556 * k, 2);
 }
 
+// The broken_bonds field (issue 44): each particle's count from view.broken_bonds, 0 without;
+// counts 0, 3, 6 over the range [0, 6] draw viridis at 0, 0.5 and 1 (as the speed field above).
+TEST(RendererTest, ColoursByBrokenBonds) {
+  ColorField field = ColorField::kSpeed;
+  ASSERT_TRUE(ParseColorField("broken_bonds", &field));
+  EXPECT_EQ(field, ColorField::kBrokenBonds);
+  EXPECT_STREQ(FieldName(field), "broken_bonds");
+  RenderSettings settings = PlainSettings();
+  settings.color_by = ColorField::kBrokenBonds;
+  settings.range_min = 0;
+  settings.range_max = 6;
+  settings.shading = false;
+  const Pinhole pinhole(settings.camera);
+  const dem::Vec3 centre = settings.camera.target;
+  const dem::Vec3 xs[3] = {centre - 0.06 * pinhole.r, centre, centre + 0.06 * pinhole.r};
+  const int expected[3][3] = {{68, 1, 84}, {33, 145, 140}, {253, 231, 37}};
+  dem::Particles p;
+  for (int k = 0; k < 3; ++k) AddSphere(&p, xs[k], 0.02, {0, 0, 0});
+  sim::WorldView view;
+  view.particles = &p;
+  std::vector<float> values;
+  ComputeField(view, field, &values);  // no counts: 0 each
+  EXPECT_EQ(values, std::vector<float>(3, 0.0f));
+  view.broken_bonds = {0, 3, 6};
+  ComputeField(view, field, &values);
+  EXPECT_EQ(values, view.broken_bonds);
+  const Image& flat = SharedRenderer().Render(view, settings);
+  for (int k = 0; k < 3; ++k) {
+    double col = 0, row = 0;
+    pinhole.Project(xs[k], &col, &row);
+    const Rgba8 c = flat.At(static_cast<int>(col), static_cast<int>(row));
+    EXPECT_NEAR(c.r, expected[k][0], 1) << k;
+    EXPECT_NEAR(c.g, expected[k][1], 1) << k;
+    EXPECT_NEAR(c.b, expected[k][2], 1) << k;
+  }
+  // A saved run's range: [0, the most seen], at least [0, 1].
+  AutoRange range;
+  range.Update(field, {0, 0, 0});
+  EXPECT_EQ(range.max(), 1.0);
+  range.Update(field, {0, 4, 1});
+  EXPECT_EQ(range.max(), 4.0);
+}
+
 // (c) A view with nothing in it is the background colour at every pixel.
 TEST(RendererTest, EmptySceneIsBackground) {
   RenderSettings settings = PlainSettings();
