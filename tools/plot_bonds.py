@@ -7,8 +7,8 @@
 Reads scoopsim run files (SI units):
   /scoop/time (n) [s], /scoop/pass (n), /scoop/rho_path (or /scoop/rho) (n) [m],
   /scoop/force_scoop (n x 3) [N] (l_scoop frame), /scoop/collected_mass (P) [kg] (optional);
-  /bonds/time (k) [s], /bonds/intact (k), /bonds/broken (records: time [s], a, b, x, y, z [m],
-  mode 1 tension / 2 shear, stress [Pa]); an unbonded run has no /bonds/ and counts zero.
+  /bonds/time (k) [s], /bonds/intact (k), /bonds/broken/time (b) [s] and /bonds/broken/mode (b:
+  1 tension, 2 shear) (docs/outputs.md); an unbonded run has no /bonds/ and counts zero.
 Draws, one colour per run and one line style per pass: |F| against rho (smoothed by a centred
 moving average over --smooth samples, odd), and the bonds broken so far in the pass against rho
 (each break placed at the rho of the scoop row at or after its time). --csv writes one row per
@@ -56,10 +56,9 @@ def read_run(path):
                             else None)
         run["bond_time"] = f["/bonds/time"][()] if "/bonds/time" in f else np.zeros(0)
         run["intact"] = f["/bonds/intact"][()] if "/bonds/intact" in f else np.zeros(0)
-        if "/bonds/broken" in f:
-            b = f["/bonds/broken"][()]
-            run["break_time"] = np.asarray(b["time"], dtype=float)
-            run["break_mode"] = np.asarray(b["mode"], dtype=int)
+        if "/bonds/broken/time" in f:
+            run["break_time"] = np.asarray(f["/bonds/broken/time"][()], dtype=float)
+            run["break_mode"] = np.asarray(need(f, path, "/bonds/broken/mode"), dtype=int)
         else:
             run["break_time"] = np.zeros(0)
             run["break_mode"] = np.zeros(0, dtype=int)
