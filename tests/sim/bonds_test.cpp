@@ -167,15 +167,16 @@ TEST(BondsTest, BadValuesAreOneLine) {
     EXPECT_EQ(LoadError(name, SceneText(c.extra)), (TempDir() / name).string() + ":" + c.expected);
   }
   // The strengths and the shear block's own keys.
-  std::string t = SceneText();
-  t.replace(t.find("tensile_strength: 1.0e4"), 23, "tensile_strength: -5");
-  EXPECT_EQ(LoadError("bad_tensile.yaml", t),
-            (TempDir() / "bad_tensile.yaml").string() +
-                ":13: bed.bonds.tensile_strength: expected a number > 0 (Pa), or .inf for a bond "
-                "that never breaks, got -5");
-  std::string f = SceneText();
-  f.replace(f.find("friction_angle: 30"), 18, "friction_angle: 90");
-  EXPECT_EQ(LoadError("bad_friction.yaml", f),
+  const auto replaced = [](const std::string& from, const std::string& to) {
+    std::string text = SceneText();
+    return text.replace(text.find(from), from.size(), to);
+  };
+  EXPECT_EQ(
+      LoadError("bad_tensile.yaml", replaced("tensile_strength: 1.0e4", "tensile_strength: -5")),
+      (TempDir() / "bad_tensile.yaml").string() +
+          ":13: bed.bonds.tensile_strength: expected a number > 0 (Pa), or .inf for a bond "
+          "that never breaks, got -5");
+  EXPECT_EQ(LoadError("bad_friction.yaml", replaced("friction_angle: 30", "friction_angle: 90")),
             (TempDir() / "bad_friction.yaml").string() +
                 ":14: bed.bonds.shear_strength.friction_angle: expected a number in [0, 90) (deg), "
                 "got 90");
