@@ -31,6 +31,17 @@ constexpr const char* kBondScalars[9] = {"radius",           "kn",       "ks",
                                          "damping_ratio",    "fn",       "mt"};
 constexpr const char* kBondVectors[3] = {"fs", "mb", "normal"};
 
+// A new group of a bed file and the two id columns a, b (n) that /contacts and /bonds open with.
+Handle NewGroupWithPairs(hid_t file, const std::string& name, const int64_t* a, const int64_t* b,
+                         size_t n) {
+  Handle group(CheckId(H5Gcreate2(file, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                       ("H5Gcreate2 " + name).c_str()),
+               H5Gclose);
+  h5::WriteArray(group.get(), "a", H5T_STD_I64LE, H5T_NATIVE_INT64, a, n, 1);
+  h5::WriteArray(group.get(), "b", H5T_STD_I64LE, H5T_NATIVE_INT64, b, n, 1);
+  return group;
+}
+
 // The particle datasets of /particles that are hard links to the snapshot's (one copy on disk).
 const char* const kLinkedFields[] = {"id",     "position", "velocity", "angular_velocity",
                                      "radius", "material"};
@@ -156,11 +167,7 @@ void WriteBonds(hid_t file, const std::vector<dem::Bond>& bonds) {
       vectors[j * 3 * n + 3 * k + 2] = v[j].z;
     }
   }
-  Handle group(CheckId(H5Gcreate2(file, "/bonds", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-                       "H5Gcreate2 /bonds"),
-               H5Gclose);
-  h5::WriteArray(group.get(), "a", H5T_STD_I64LE, H5T_NATIVE_INT64, a.data(), n, 1);
-  h5::WriteArray(group.get(), "b", H5T_STD_I64LE, H5T_NATIVE_INT64, b.data(), n, 1);
+  const Handle group = NewGroupWithPairs(file, "/bonds", a.data(), b.data(), n);
   h5::WriteArray(group.get(), "intact", H5T_STD_U8LE, H5T_NATIVE_UINT8, intact.data(), n, 1);
   for (int j = 0; j < 9; ++j)
     h5::WriteArray(group.get(), kBondScalars[j], H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
@@ -218,11 +225,7 @@ h5::SnapshotEntry WriteBed(hid_t file, const dem::System& system, const std::str
     shear[3 * k + 1] = contacts[k].shear.y;
     shear[3 * k + 2] = contacts[k].shear.z;
   }
-  Handle group(CheckId(H5Gcreate2(file, "/contacts", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-                       "H5Gcreate2 /contacts"),
-               H5Gclose);
-  h5::WriteArray(group.get(), "a", H5T_STD_I64LE, H5T_NATIVE_INT64, a.data(), m, 1);
-  h5::WriteArray(group.get(), "b", H5T_STD_I64LE, H5T_NATIVE_INT64, b.data(), m, 1);
+  Handle group = NewGroupWithPairs(file, "/contacts", a.data(), b.data(), m);
   h5::WriteArray(group.get(), "shear", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, shear.data(), m, 3);
   group.reset();
   if (system.clumps().size() > 0) WriteClumps(file, system);

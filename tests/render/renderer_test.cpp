@@ -138,6 +138,19 @@ TEST(RendererTest, OneSphereAtThePinholeProjection) {
 // normal facing the camera, n = (0, 0, 1) in view space, so it shows
 // c * (kAmbient + (1 - kAmbient) * L_z / |L|), within 2 (the pixel centre is off the exact centre
 // by < 0.5 px, the normal by < 0.5 / 20 rad).
+// The three spheres at xs are drawn flat in viridis at 0, 0.5 and 1 (8-bit, to 1).
+void ExpectViridisEnds(const Image& image, const Pinhole& pinhole, const dem::Vec3 xs[3]) {
+  const int expected[3][3] = {{68, 1, 84}, {33, 145, 140}, {253, 231, 37}};  // viridis 0, .5, 1
+  for (int k = 0; k < 3; ++k) {
+    double col = 0, row = 0;
+    pinhole.Project(xs[k], &col, &row);
+    const Rgba8 c = image.At(static_cast<int>(col), static_cast<int>(row));
+    EXPECT_NEAR(c.r, expected[k][0], 1) << "sphere " << k;
+    EXPECT_NEAR(c.g, expected[k][1], 1) << "sphere " << k;
+    EXPECT_NEAR(c.b, expected[k][2], 1) << "sphere " << k;
+  }
+}
+
 TEST(RendererTest, ColoursFollowTheColourMap) {
   RenderSettings settings = PlainSettings();
   settings.range_min = 0;
@@ -148,20 +161,11 @@ TEST(RendererTest, ColoursFollowTheColourMap) {
   const dem::Vec3 centre = settings.camera.target;
   const dem::Vec3 xs[3] = {centre - 0.06 * pinhole.r, centre, centre + 0.06 * pinhole.r};
   const double speeds[3] = {0, 0.5, 1};
-  const int expected[3][3] = {{68, 1, 84}, {33, 145, 140}, {253, 231, 37}};  // viridis 0, .5, 1
   dem::Particles p;
   for (int k = 0; k < 3; ++k) AddSphere(&p, xs[k], 0.02, {speeds[k], 0, 0});
   sim::WorldView view;
   view.particles = &p;
-  const Image& flat = SharedRenderer().Render(view, settings);
-  for (int k = 0; k < 3; ++k) {
-    double col = 0, row = 0;
-    pinhole.Project(xs[k], &col, &row);
-    const Rgba8 c = flat.At(static_cast<int>(col), static_cast<int>(row));
-    EXPECT_NEAR(c.r, expected[k][0], 1) << "speed " << speeds[k];
-    EXPECT_NEAR(c.g, expected[k][1], 1) << "speed " << speeds[k];
-    EXPECT_NEAR(c.b, expected[k][2], 1) << "speed " << speeds[k];
-  }
+  ExpectViridisEnds(SharedRenderer().Render(view, settings), pinhole, xs);
 
   settings.shading = true;
   const Image& lit = SharedRenderer().Render(view, settings);
@@ -192,7 +196,6 @@ TEST(RendererTest, ColoursByBrokenBonds) {
   const Pinhole pinhole(settings.camera);
   const dem::Vec3 centre = settings.camera.target;
   const dem::Vec3 xs[3] = {centre - 0.06 * pinhole.r, centre, centre + 0.06 * pinhole.r};
-  const int expected[3][3] = {{68, 1, 84}, {33, 145, 140}, {253, 231, 37}};
   dem::Particles p;
   for (int k = 0; k < 3; ++k) AddSphere(&p, xs[k], 0.02, {0, 0, 0});
   sim::WorldView view;
@@ -203,15 +206,7 @@ TEST(RendererTest, ColoursByBrokenBonds) {
   view.broken_bonds = {0, 3, 6};
   ComputeField(view, field, &values);
   EXPECT_EQ(values, view.broken_bonds);
-  const Image& flat = SharedRenderer().Render(view, settings);
-  for (int k = 0; k < 3; ++k) {
-    double col = 0, row = 0;
-    pinhole.Project(xs[k], &col, &row);
-    const Rgba8 c = flat.At(static_cast<int>(col), static_cast<int>(row));
-    EXPECT_NEAR(c.r, expected[k][0], 1) << k;
-    EXPECT_NEAR(c.g, expected[k][1], 1) << k;
-    EXPECT_NEAR(c.b, expected[k][2], 1) << k;
-  }
+  ExpectViridisEnds(SharedRenderer().Render(view, settings), pinhole, xs);
   // A saved run's range: [0, the most seen], at least [0, 1].
   AutoRange range;
   range.Update(field, {0, 0, 0});

@@ -167,15 +167,16 @@ TEST(BondsTest, BadValuesAreOneLine) {
     EXPECT_EQ(LoadError(name, SceneText(c.extra)), (TempDir() / name).string() + ":" + c.expected);
   }
   // The strengths and the shear block's own keys.
-  std::string t = SceneText();
-  t.replace(t.find("tensile_strength: 1.0e4"), 23, "tensile_strength: -5");
-  EXPECT_EQ(LoadError("bad_tensile.yaml", t),
-            (TempDir() / "bad_tensile.yaml").string() +
-                ":13: bed.bonds.tensile_strength: expected a number > 0 (Pa), or .inf for a bond "
-                "that never breaks, got -5");
-  std::string f = SceneText();
-  f.replace(f.find("friction_angle: 30"), 18, "friction_angle: 90");
-  EXPECT_EQ(LoadError("bad_friction.yaml", f),
+  const auto replaced = [](const std::string& from, const std::string& to) {
+    std::string text = SceneText();
+    return text.replace(text.find(from), from.size(), to);
+  };
+  EXPECT_EQ(
+      LoadError("bad_tensile.yaml", replaced("tensile_strength: 1.0e4", "tensile_strength: -5")),
+      (TempDir() / "bad_tensile.yaml").string() +
+          ":13: bed.bonds.tensile_strength: expected a number > 0 (Pa), or .inf for a bond "
+          "that never breaks, got -5");
+  EXPECT_EQ(LoadError("bad_friction.yaml", replaced("friction_angle: 30", "friction_angle: 90")),
             (TempDir() / "bad_friction.yaml").string() +
                 ":14: bed.bonds.shear_strength.friction_angle: expected a number in [0, 90) (deg), "
                 "got 90");
@@ -383,28 +384,73 @@ TEST(BondsTest, BrokenBondCountsCountEachEnd) {
   EXPECT_EQ(c[3], 0.0f);  // 11
 }
 
+// A scene of weak bonds (tensile strength 50 Pa) on a saved lattice of 6 x 6 x 3 touching 8 mm
+// spheres whose top layer starts moving up at 0.5 m/s; returns the scene's path.
+std::string BreakingScene(const std::string& name) {
+  const std::string bed = (TempDir() / (name + "_bed.h5")).string();
+  std::string text =
+      SceneText("", "  file: " + bed + "\nduration: 100\noutput: {interval: 1.0e-3}\n");
+  text.replace(text.find("tensile_strength: 1.0e4"), 23, "tensile_strength: 50");
+  const std::string scene_path = Write(name + ".yaml", text);
+  const Scene scene = LoadScene(scene_path);
+  World maker(scene, 1);
+  dem::System& system = maker.mutable_system();
+  const int snow = scene.materials.Find("snow");
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 6; ++j)
+      for (int i = 0; i < 6; ++i)
+        system.AddParticle({0.05 + 0.016 * i, 0.05 + 0.016 * j, 0.008 + 0.016 * k},
+                           {0, 0, k == 2 ? 0.5 : 0.0}, {}, 0.008, snow);
+  SaveBed(bed, system, scene.yaml_text);
+  return scene_path;
+}
+
+// The colour field broken_bonds: the per-particle counts a saved run yields at a frame's time
+// (sim::BrokenBondCounts of the /bonds/broken/ records up to it, as `scoopsim render` draws them)
+// equal the live frame's (from the system's own bonds), particle by particle, at every frame.
+TEST(BondsTest, BrokenCountsOfASavedRunEqualTheLiveFrames) {
+  const Scene scene = LoadScene(BreakingScene("frames"));
+  const std::string out = (TempDir() / "frames.h5").string();
+  struct Frame {
+    double time;
+    std::vector<int64_t> ids;
+    std::vector<float> counts;
+  };
+  std::vector<Frame> frames;
+  {
+    World world(scene, 1);
+    world.OpenOutput(out);
+    world.LoadBed(scene.bed.file);
+    RunControl control;
+    control.quiet = true;
+    control.stop_after = 0.02;
+    control.frame_every = 2e-3;
+    control.on_frame = [&](const WorldView& v) {
+      frames.push_back({v.time, v.particles->id, v.broken_bonds});
+    };
+    ASSERT_EQ(world.Run(control).exit_status, 0);
+  }
+  const BondSeries s = SavedRun(out).Bonds();
+  ASSERT_GT(frames.size(), 5u);
+  ASSERT_GT(s.broken_time.size(), 0u);
+  float most = 0;
+  for (const Frame& f : frames) {
+    SCOPED_TRACE(f.time);
+    const int k = SampleAt(s.broken_time, f.time) + 1;
+    const std::vector<int64_t> a(s.broken_a.begin(), s.broken_a.begin() + k);
+    const std::vector<int64_t> b(s.broken_b.begin(), s.broken_b.begin() + k);
+    EXPECT_EQ(BrokenBondCounts(f.ids, a, b), f.counts);
+    for (float c : f.counts) most = std::max(most, c);
+  }
+  EXPECT_GE(most, 1.0f);
+}
+
 // A bonded run stopped by SIGTERM: exit 130, and its /bonds/ series and broken-bond records read
 // back through SavedRun: the intact count starts at the bonds made and only falls, each record
 // names a made bond, and the counts left plus the records are the bonds made. The top layer of
 // a bonded lattice starts moving up at 0.5 m/s: its weak bonds to the layer below break.
 TEST(BondsTest, BondedRunOutputsSurviveSigterm) {
-  const std::string bed = (TempDir() / "run_bed.h5").string();
-  std::string text =
-      SceneText("", "  file: " + bed + "\nduration: 100\noutput: {interval: 1.0e-3}\n");
-  text.replace(text.find("tensile_strength: 1.0e4"), 23, "tensile_strength: 50");
-  const std::string scene_path = Write("run.yaml", text);
-  const Scene scene = LoadScene(scene_path);
-  {
-    World maker(scene, 1);
-    dem::System& system = maker.mutable_system();
-    const int snow = scene.materials.Find("snow");
-    for (int k = 0; k < 3; ++k)
-      for (int j = 0; j < 6; ++j)
-        for (int i = 0; i < 6; ++i)
-          system.AddParticle({0.05 + 0.016 * i, 0.05 + 0.016 * j, 0.008 + 0.016 * k},
-                             {0, 0, k == 2 ? 0.5 : 0.0}, {}, 0.008, snow);
-    SaveBed(bed, system, scene.yaml_text);
-  }
+  const std::string scene_path = BreakingScene("run");
   const std::string out = (TempDir() / "run.h5").string();
   const std::string log = (TempDir() / "run.log").string();
   const pid_t pid = ::fork();
