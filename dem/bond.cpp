@@ -29,23 +29,27 @@ inline Disk DiskOf(double radius) {
   return {M_PI * r2, 0.25 * M_PI * r2 * r2, 0.5 * M_PI * r2 * r2};
 }
 
-// Rotates v (a vector of the contact plane) with the plane: by the smallest rotation taking unit
-// n0 to unit n1 (Rodrigues: with k = n0 x n1, c = n0 . n1, R v = c v + k x v + k (k . v) / (1 + c),
-// exact for any angle below pi), then about n1 by the angle 2 atan(s / 2) (Cayley: with
-// t = s / 2, v + 2 / (1 + t^2) (t n1 x v + t^2 n1 x (n1 x v)), a rotation exact in length, of
-// angle s - s^3 / 12 + ...), and drops what rounding left along n1.
-inline Vec3 CarryWithPlane(const Vec3& v, const Vec3& n0, const Vec3& n1, double s) {
-  const Vec3 k = Cross(n0, n1);
-  const double c = Dot(n0, n1);
-  Vec3 r = v;
-  if (c > -0.5) r = c * v + Cross(k, v) + (Dot(k, v) / (1.0 + c)) * k;  // else: n flipped, keep v
-  if (s != 0.0) {
-    const double t = 0.5 * s;
-    const Vec3 nv = Cross(n1, r);
-    r += (2.0 / (1.0 + t * t)) * (t * nv + (t * t) * Cross(n1, nv));
+// The turn of the contact plane over a step, applied to the vectors of the plane (the shear
+// force, the bending moment): the smallest rotation taking unit n0 to unit n1 (Rodrigues: with
+// k = n0 x n1, c = n0 . n1, R v = c v + k x v + k (k . v) / (1 + c), exact for any angle below
+// pi), then one about n1 by the angle 2 atan(s / 2) (Cayley: with t = s / 2,
+// v + 2 / (1 + t^2) (t n1 x v + t^2 n1 x (n1 x v)), a rotation exact in length, of angle
+// s - s^3 / 12 + ...); what rounding left along n1 is dropped.
+struct PlaneTurn {
+  Vec3 k, n1;
+  double c, inv_1c, t, cayley;
+  PlaneTurn(const Vec3& n0, const Vec3& n1_in, double s)
+      : k(Cross(n0, n1_in)), n1(n1_in), c(Dot(n0, n1_in)), t(0.5 * s) {
+    inv_1c = c > -0.5 ? 1.0 / (1.0 + c) : 0.0;  // n flipped within a step: keep v's direction
+    cayley = 2.0 / (1.0 + t * t);
   }
-  return r - Dot(r, n1) * n1;
-}
+  Vec3 operator()(const Vec3& v) const {
+    Vec3 r = c > -0.5 ? c * v + Cross(k, v) + (Dot(k, v) * inv_1c) * k : v;
+    const Vec3 nv = Cross(n1, r);
+    r += cayley * (t * nv + (t * t) * Cross(n1, nv));
+    return r - Dot(r, n1) * n1;
+  }
+};
 
 }  // namespace
 
@@ -143,10 +147,11 @@ namespace {
 constexpr uint8_t kBroke = 1, kWakeA = 2, kWakeB = 4;
 
 // One live bond's step (dem/bond.h): its state carried with the contact plane and incremented,
-// the break test, the force and torques on its two spheres into slot q. A bond between two
+// the break test, the force and torques on its two spheres into its slots. A bond between two
 // sleepers is left as it is (frozen). Returns the event bits (kBroke, kWakeA, kWakeB).
-inline uint8_t StepBond(Bond& b, int32_t i, int32_t j, const Particles& p, bool sleeping,
-                        double wake2, double dt, Vec3* force_b, Vec3* torque_a, Vec3* torque_b) {
+inline uint8_t StepBond(Bond& b, const BondConstants& c, int32_t i, int32_t j, const Particles& p,
+                        bool sleeping, double wake2, double dt, Vec3* force_b, Vec3* torque_a,
+                        Vec3* torque_b) {
   *force_b = *torque_a = *torque_b = Vec3{};
   const bool awake_a = !sleeping || p.awake[i], awake_b = !sleeping || p.awake[j];
   if (!awake_a && !awake_b) return 0;
@@ -157,9 +162,8 @@ inline uint8_t StepBond(Bond& b, int32_t i, int32_t j, const Particles& p, bool 
   const Vec3 d = p.x[j] - p.x[i];
   const double dist = Norm(d);
   const Vec3 n = (1.0 / dist) * d;
-  const double ra = p.radius[i], rb = p.radius[j];
-  const double half_gap = 0.5 * (dist - ra - rb);
-  const double lever_a = ra + half_gap, lever_b = rb + half_gap;
+  const double half_gap = 0.5 * (dist - p.radius[i] - p.radius[j]);
+  const double lever_a = p.radius[i] + half_gap, lever_b = p.radius[j] + half_gap;
   // Relative motion of b against a at the contact point, and relative spin.
   const Vec3 wa = p.w[i], wb = p.w[j];
   const Vec3 v_rel = (p.v[j] - p.v[i]) - Cross(lever_a * wa + lever_b * wb, n);
@@ -169,37 +173,26 @@ inline uint8_t StepBond(Bond& b, int32_t i, int32_t j, const Particles& p, bool 
   const double wn = Dot(w_rel, n);
   const Vec3 ws = w_rel - wn * n;
   // The state carried with the contact plane, then this step's increments.
-  const Disk disk = DiskOf(b.radius);
-  const double twist = 0.5 * Dot(wa + wb, n) * dt;
-  b.fs = CarryWithPlane(b.fs, b.normal, n, twist);
-  b.mb = CarryWithPlane(b.mb, b.normal, n, twist);
+  const PlaneTurn turn(b.normal, n, 0.5 * Dot(wa + wb, n) * dt);
+  b.fs = turn(b.fs);
+  b.mb = turn(b.mb);
   b.normal = n;
-  b.fn += b.kn * disk.area * (vn * dt);
-  b.fs -= (b.ks * disk.area * dt) * vs;
-  b.mt -= b.ks * disk.polar * (wn * dt);
-  b.mb -= (b.kn * disk.inertia * dt) * ws;
+  b.fn += c.kn_area * (vn * dt);
+  b.fs -= (c.ks_area * dt) * vs;
+  b.mt -= c.ks_polar * (wn * dt);
+  b.mb -= (c.kn_inertia * dt) * ws;
   // Break test (dem/bond.h): tension first, then Mohr-Coulomb shear.
-  const double sigma = b.fn / disk.area + Norm(b.mb) * b.radius / disk.inertia;
-  const double tau = Norm(b.fs) / disk.area + std::abs(b.mt) * b.radius / disk.polar;
-  if (sigma >= b.tensile_strength || tau >= b.cohesion - b.fn / disk.area * b.tan_friction) {
+  const double sigma_n = b.fn * c.inv_area;
+  const double sigma = sigma_n + Norm(b.mb) * c.rim_over_inertia;
+  const double tau = Norm(b.fs) * c.inv_area + std::abs(b.mt) * c.rim_over_polar;
+  if (sigma >= b.tensile_strength || tau >= b.cohesion - sigma_n * b.tan_friction) {
     b.intact = false;
     return kBroke | kWakeA | kWakeB;
   }
-  // Force and moment on b, with the optional damping (not stored).
-  Vec3 f = b.fs - b.fn * n;
-  Vec3 moment = b.mb + b.mt * n;
-  if (b.damping_ratio > 0.0) {
-    const double ma = p.mass[i], mb = p.mass[j];
-    const double m_star = ma * mb / (ma + mb);
-    const double ia = 0.4 * ma * ra * ra, ib = 0.4 * mb * rb * rb;
-    const double i_star = ia * ib / (ia + ib);
-    const double z2 = 2.0 * b.damping_ratio;
-    f -= (z2 * std::sqrt(b.kn * disk.area * m_star) * vn) * n +
-         (z2 * std::sqrt(b.ks * disk.area * m_star)) * vs;
-    moment -= (z2 * std::sqrt(b.ks * disk.polar * i_star) * wn) * n +
-              (z2 * std::sqrt(b.kn * disk.inertia * i_star)) * ws;
-  }
-  // Torques about the centres: x_c - x_b = -lever_b n, x_c - x_a = lever_a n (n x f = n x f_s).
+  // Force and moment on b, with the damping (not stored; zero coefficients without it).
+  const Vec3 f = (b.fs - b.fn * n) - ((c.damp_n * vn) * n + c.damp_s * vs);
+  const Vec3 moment = (b.mb + b.mt * n) - ((c.damp_t * wn) * n + c.damp_b * ws);
+  // Torques about the centres: x_c - x_b = -lever_b n, x_c - x_a = lever_a n.
   const Vec3 nf = Cross(n, f);
   *force_b = f;
   *torque_b = moment - lever_b * nf;
@@ -207,10 +200,38 @@ inline uint8_t StepBond(Bond& b, int32_t i, int32_t j, const Particles& p, bool 
   return event;
 }
 
+// The constants of a live bond: its springs, stresses and damping (StepBond).
+BondConstants ConstantsOf(const Bond& b, const Particles& p, int32_t i, int32_t j) {
+  const Disk disk = DiskOf(b.radius);
+  BondConstants c;
+  c.kn_area = b.kn * disk.area;
+  c.ks_area = b.ks * disk.area;
+  c.ks_polar = b.ks * disk.polar;
+  c.kn_inertia = b.kn * disk.inertia;
+  c.inv_area = 1.0 / disk.area;
+  c.rim_over_inertia = b.radius / disk.inertia;
+  c.rim_over_polar = b.radius / disk.polar;
+  if (b.damping_ratio > 0.0) {
+    // 2 z sqrt(k m*) with the pair's reduced mass and moment of inertia (I = 2/5 m r^2).
+    const double ma = p.mass[i], mb = p.mass[j];
+    const double m_star = ma * mb / (ma + mb);
+    const double ia = 0.4 * ma * p.radius[i] * p.radius[i];
+    const double ib = 0.4 * mb * p.radius[j] * p.radius[j];
+    const double i_star = ia * ib / (ia + ib);
+    const double z2 = 2.0 * b.damping_ratio;
+    c.damp_n = z2 * std::sqrt(c.kn_area * m_star);
+    c.damp_s = z2 * std::sqrt(c.ks_area * m_star);
+    c.damp_t = z2 * std::sqrt(c.ks_polar * i_star);
+    c.damp_b = z2 * std::sqrt(c.kn_inertia * i_star);
+  }
+  return c;
+}
+
 }  // namespace
 
 void IndexBonds(Workspace& m, const Particles& p) {
   BondWork& w = m.bond;
+  w.Sync();
   const size_t n = p.size();
   // Storage index of each persistent id.
   int64_t max_id = -1;
@@ -218,31 +239,55 @@ void IndexBonds(Workspace& m, const Particles& p) {
   std::vector<int32_t>& index = w.index_of_id;
   index.assign(static_cast<size_t>(max_id + 1), -1);
   for (size_t i = 0; i < n; ++i) index[p.id[i]] = static_cast<int32_t>(i);
-  w.live.clear();
+  // The intact bonds in bond order (k), their spheres' storage indices (AddBonds and
+  // RemoveParticles keep every bond's spheres present).
+  std::vector<int32_t>& in_order = w.fill;
+  in_order.clear();
   for (size_t k = 0; k < w.bonds.size(); ++k)
-    if (w.bonds[k].intact) w.live.push_back(static_cast<int32_t>(k));
-  const size_t nl = w.live.size();
+    if (w.bonds[k].intact) in_order.push_back(static_cast<int32_t>(k));
+  const size_t nl = in_order.size();
+  std::vector<int32_t>& sa = w.scratch_a;
+  std::vector<int32_t>& sb = w.scratch_b;
+  sa.resize(nl);
+  sb.resize(nl);
+  for (size_t k = 0; k < nl; ++k) {
+    sa[k] = index[w.bonds[in_order[k]].a];
+    sb[k] = index[w.bonds[in_order[k]].b];
+  }
+  // The processing order (q): by the lower storage index of the two spheres (a counting sort,
+  // stable), so that the bond pass reads the particles nearly in storage order.
+  std::vector<int32_t>& pos = w.scratch_pos;
+  pos.resize(nl);
+  w.start.assign(n + 1, 0);
+  for (size_t k = 0; k < nl; ++k) ++w.start[std::min(sa[k], sb[k]) + 1];
+  for (size_t i = 0; i < n; ++i) w.start[i + 1] += w.start[i];
+  for (size_t k = 0; k < nl; ++k) pos[k] = w.start[std::min(sa[k], sb[k])]++;
+  w.live.resize(nl);
+  w.hot.resize(nl);
   w.ia.resize(nl);
   w.ib.resize(nl);
-  for (size_t q = 0; q < nl; ++q) {
-    const Bond& b = w.bonds[w.live[q]];
-    w.ia[q] = index[b.a];  // AddBonds and RemoveParticles keep every bond's spheres present
-    w.ib[q] = index[b.b];
+  for (size_t k = 0; k < nl; ++k) {
+    w.live[pos[k]] = in_order[k];
+    w.hot[pos[k]] = w.bonds[in_order[k]];
+    w.ia[pos[k]] = sa[k];
+    w.ib[pos[k]] = sb[k];
   }
-  // Each particle's bond ends, in bond order (a counting sort).
+  // Each particle's bond ends, in bond order (a counting sort over k), naming their slots q.
   w.start.assign(n + 1, 0);
-  for (size_t q = 0; q < nl; ++q) {
-    ++w.start[w.ia[q] + 1];
-    ++w.start[w.ib[q] + 1];
+  for (size_t k = 0; k < nl; ++k) {
+    ++w.start[sa[k] + 1];
+    ++w.start[sb[k] + 1];
   }
   for (size_t i = 0; i < n; ++i) w.start[i + 1] += w.start[i];
   ResizeWithRoom(w.entry, 2 * nl);
-  std::vector<int32_t>& at = w.fill;
+  std::vector<int32_t>& at = w.scratch_at;
   at.assign(w.start.begin(), w.start.end() - 1);
-  for (size_t q = 0; q < nl; ++q) {
-    w.entry[at[w.ia[q]]++] = static_cast<int32_t>(2 * q);
-    w.entry[at[w.ib[q]]++] = static_cast<int32_t>(2 * q + 1);
+  for (size_t k = 0; k < nl; ++k) {
+    w.entry[at[sa[k]]++] = 2 * pos[k];
+    w.entry[at[sb[k]]++] = 2 * pos[k] + 1;
   }
+  w.constants.resize(nl);
+  for (size_t q = 0; q < nl; ++q) w.constants[q] = ConstantsOf(w.hot[q], p, w.ia[q], w.ib[q]);
   ResizeWithRoom(w.force_b, nl);
   ResizeWithRoom(w.torque_a, nl);
   ResizeWithRoom(w.torque_b, nl);
@@ -263,10 +308,11 @@ void BondForces(Workspace& m, Particles& p, const SleepConfig& sleep, double dt,
   int any = 0;
 #pragma omp parallel for schedule(static) num_threads(nt) reduction(| : any)
   for (int64_t q = 0; q < nl; ++q) {
-    w.event[q] = StepBond(w.bonds[w.live[q]], w.ia[q], w.ib[q], p, sleeping, wake2, dt,
+    w.event[q] = StepBond(w.hot[q], w.constants[q], w.ia[q], w.ib[q], p, sleeping, wake2, dt,
                           &w.force_b[q], &w.torque_a[q], &w.torque_b[q]);
     any |= w.event[q];
   }
+  w.hot_ahead = true;
   // 2. Each particle sums its bonds in bond order; a sleeper that a bond wakes starts at rest in
   // equilibrium (zero force and torque, as a sleeper woken by a touch).
   const int64_t n = static_cast<int64_t>(p.size());
@@ -307,9 +353,14 @@ void BondForces(Workspace& m, Particles& p, const SleepConfig& sleep, double dt,
   }
   // 3. The breaks, in bond order.
   if (!(any & kBroke)) return;
-  for (int64_t q = 0; q < nl; ++q) {
-    if (!(w.event[q] & kBroke)) continue;
-    const Bond& b = w.bonds[w.live[q]];
+  std::vector<int32_t>& broke = w.scratch_pos;
+  broke.clear();
+  for (int64_t q = 0; q < nl; ++q)
+    if (w.event[q] & kBroke) broke.push_back(static_cast<int32_t>(q));
+  std::sort(broke.begin(), broke.end(),
+            [&w](int32_t l, int32_t r) { return w.live[l] < w.live[r]; });
+  for (const int32_t q : broke) {
+    const Bond& b = w.hot[q];
     const Vec3 xa = p.x[w.ia[q]], xb = p.x[w.ib[q]];
     const double dist = Norm(xb - xa);
     const double lever_a = 0.5 * (dist + p.radius[w.ia[q]] - p.radius[w.ib[q]]);
@@ -322,7 +373,7 @@ void BondForces(Workspace& m, Particles& p, const SleepConfig& sleep, double dt,
     br.stress = br.mode == BondBreakMode::kTension ? BondSigma(b) : BondTau(b);
     w.breaks.push_back(br);
   }
-  w.stale = true;  // the live list lost them
+  w.stale = true;  // the live list lost them (Sync puts them back into `bonds`, broken)
 }
 
 }  // namespace internal

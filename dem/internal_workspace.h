@@ -154,9 +154,19 @@ class SlabRuns {
   int size_ = 0;
 };
 
+// A live bond's constants, made by IndexBonds (the pass would otherwise make them every step).
+struct BondConstants {
+  double kn_area = 0, ks_area = 0;                  // k_n A, k_s A [N/m]
+  double ks_polar = 0, kn_inertia = 0;              // k_s J, k_n I [N m/rad]
+  double inv_area = 0;                              // 1 / A [1/m^2]
+  double rim_over_inertia = 0, rim_over_polar = 0;  // R / I, R / J [1/m^3]
+  double damp_n = 0, damp_s = 0;                    // 2 z sqrt(k_n A m*), 2 z sqrt(k_s A m*) [kg/s]
+  double damp_t = 0, damp_b = 0;  // 2 z sqrt(k_s J I*), 2 z sqrt(k_n I I*) [kg m^2/s]
+};
+
 // Breakable bonds (dem/bond.h; the phase: BondForces, dem/bond.cpp). The bonds themselves, in the
 // order added, are the state; the rest is made again from them and the storage order (IndexBonds)
-// whenever `stale`. Arrays marked (live) have one entry per intact bond, in bond order.
+// whenever `stale`. Arrays marked (live) have one entry per intact bond.
 struct BondWork {
   std::vector<Bond> bonds;        // every bond, intact or broken (System::bonds())
   std::vector<BondBreak> breaks;  // broken since the last System::TakeBondBreaks
@@ -164,17 +174,31 @@ struct BondWork {
   // ib, start and entry must be made again. Set by System::Rebuild and the bond calls; cleared by
   // IndexBonds.
   bool stale = true;
-  std::vector<int32_t> live;    // index in `bonds` of each intact bond (live)
-  std::vector<int32_t> ia, ib;  // storage index of its spheres a and b (live)
+  // The intact bonds in the order the pass takes them (q): by the lower storage index of their
+  // two spheres, so that it reads the particles nearly in storage order.
+  std::vector<int32_t> live;  // index in `bonds` of each intact bond (live)
+  // The intact bonds themselves in that order, which the pass steps in place of `bonds` (read at
+  // random, their 168 bytes each cost the pass more than all else); copied back by Sync (live).
+  std::vector<Bond> hot;
+  std::vector<BondConstants> constants;  // (live)
+  bool hot_ahead = false;                // `hot` holds newer states than `bonds`
+  std::vector<int32_t> ia, ib;           // storage index of its spheres a and b (live)
   // Each particle's bond ends, for the accumulation: particle i owns entries start[i] ..
-  // start[i + 1], each 2 k + side (k: position in live; side 0: a, 1: b), in bond order (N + 1;
-  // 2 live).
+  // start[i + 1], each 2 q + side (side 0: a, 1: b), in bond order (N + 1; 2 live), so that the
+  // sums do not depend on the storage order.
   std::vector<int32_t> start, entry;
   // This step's results of each live bond (BondForces), summed per particle afterwards.
-  std::vector<Vec3> force_b;               // force on b [N] (live); a feels its opposite
-  std::vector<Vec3> torque_a, torque_b;    // torques about the centres [N m] (live)
-  std::vector<uint8_t> event;              // kBroke | kWakeA | kWakeB (live)
-  std::vector<int32_t> index_of_id, fill;  // IndexBonds' scratch
+  std::vector<Vec3> force_b;             // force on b [N] (live); a feels its opposite
+  std::vector<Vec3> torque_a, torque_b;  // torques about the centres [N m] (live)
+  std::vector<uint8_t> event;            // kBroke | kWakeA | kWakeB (live)
+  std::vector<int32_t> index_of_id, fill, scratch_a, scratch_b, scratch_pos, scratch_at;  // scratch
+
+  // Brings `bonds` up to date with `hot`: call before anything reads or changes `bonds`.
+  void Sync() {
+    if (!hot_ahead) return;
+    for (size_t q = 0; q < live.size(); ++q) bonds[live[q]] = hot[q];
+    hot_ahead = false;
+  }
 };
 
 // The System's working data (see the top of this file). Array shapes: N particles in storage

@@ -97,6 +97,7 @@ void WorkspaceFields(Archive& a, internal::Workspace& m) {
 // The bonds and the breaks not yet taken; the rest of Workspace::bond is made again from them.
 template <typename Archive>
 void BondFields(Archive& a, internal::BondWork& w) {
+  w.Sync();  // saving: the latest state; loading: the copy is dropped below
   a(w.bonds);
   a(w.breaks);
   w.stale = true;
@@ -161,6 +162,7 @@ void System::RestoreState(const std::vector<char>& bytes) {
   } else {
     ws_->bond = internal::BondWork{};
   }
+  ws_->bond.hot_ahead = false;  // (BondFields marked the bonds' index stale)
   if (!a.done()) throw std::runtime_error("state: bytes left over");
 }
 

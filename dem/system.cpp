@@ -133,6 +133,7 @@ void System::RemoveParticles(const std::vector<int64_t>& requested) {
   // Their bonds go with them.
   internal::BondWork& bw = m.bond;
   if (!bw.bonds.empty()) {
+    bw.Sync();
     size_t kept = 0;
     for (const Bond& b : bw.bonds)
       if (!gone[b.a] && !gone[b.b]) bw.bonds[kept++] = b;
@@ -317,6 +318,7 @@ void System::AddBonds(const std::vector<Bond>& bonds) {
   // Every bond is checked before any is added.
   std::vector<int32_t> index(next_id_, -1);
   for (size_t i = 0; i < p_.size(); ++i) index[p_.id[i]] = static_cast<int32_t>(i);
+  ws_->bond.Sync();
   std::vector<std::pair<int64_t, int64_t>> pairs;
   pairs.reserve(ws_->bond.bonds.size() + bonds.size());
   for (const Bond& b : ws_->bond.bonds) pairs.emplace_back(b.a, b.b);
@@ -362,9 +364,13 @@ void System::AddBonds(const std::vector<Bond>& bonds) {
   bw.stale = true;
 }
 
-const std::vector<Bond>& System::bonds() const { return ws_->bond.bonds; }
+const std::vector<Bond>& System::bonds() const {
+  ws_->bond.Sync();  // the state only moves from the pass's copy into the record
+  return ws_->bond.bonds;
+}
 
 int64_t System::intact_bond_count() const {
+  ws_->bond.Sync();
   int64_t n = 0;
   for (const Bond& b : ws_->bond.bonds) n += b.intact;
   return n;
@@ -377,6 +383,7 @@ std::vector<BondBreak> System::TakeBondBreaks() {
 }
 
 double System::BondEnergy() const {
+  ws_->bond.Sync();
   double e = 0;
   for (const Bond& b : ws_->bond.bonds)
     if (b.intact) e += dem::BondEnergy(b);

@@ -101,6 +101,7 @@ uint64_t System::StateHash() const {
   }
   mix(&time_, sizeof(double));
   // Bonds, only when there are any (an unbonded run hashes as it did before bonds).
+  ws_->bond.Sync();
   for (const Bond& b : ws_->bond.bonds) {
     mix(&b.a, sizeof(int64_t));
     mix(&b.b, sizeof(int64_t));
