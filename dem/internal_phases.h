@@ -80,6 +80,19 @@ inline bool InBox(const Vec3& c, const Vec3& lo, const Vec3& hi, double d) {
            c.z > hi.z + d);
 }
 
+// --- dem/bond.cpp: breakable bonds --------------------------------------------------------------
+
+// The bonds' forces and torques into p.f and p.t (awake particles only), after the contacts: each
+// live bond on its own (in parallel, its own result slots), then each particle sums its bonds in
+// bond order. Breaks go to Workspace::bond.breaks with time t_end; a break wakes both ends, an end
+// awake and faster than sleep.wake_speed wakes the other (sleeping on). A bond between two
+// sleepers is left as it is. Nothing to do without bonds.
+void BondForces(Workspace& m, Particles& p, const SleepConfig& sleep, double dt, double t_end,
+                int nt);
+// Makes Workspace::bond's live list, storage indices and per-particle entries again (clears
+// bond.stale); m.index_of_id must name the present storage (as after a Rebuild).
+void IndexBonds(Workspace& m, const Particles& p);
+
 // --- dem/sleep.cpp: sleeping --------------------------------------------------------------------
 
 // Sleep/wake decisions (every sleep.check_every steps); marks the lists stale when any changed.

@@ -11,6 +11,7 @@
 #include <memory>
 #include <vector>
 
+#include "dem/bond.h"
 #include "dem/contact.h"
 #include "dem/mesh.h"
 #include "dem/neighbor.h"
@@ -153,6 +154,29 @@ class SlabRuns {
   int size_ = 0;
 };
 
+// Breakable bonds (dem/bond.h; the phase: BondForces, dem/bond.cpp). The bonds themselves, in the
+// order added, are the state; the rest is made again from them and the storage order (IndexBonds)
+// whenever `stale`. Arrays marked (live) have one entry per intact bond, in bond order.
+struct BondWork {
+  std::vector<Bond> bonds;        // every bond, intact or broken (System::bonds())
+  std::vector<BondBreak> breaks;  // broken since the last System::TakeBondBreaks
+  // Storage order changed, particles or bonds were added or removed, or a bond broke: live, ia,
+  // ib, start and entry must be made again. Set by System::Rebuild and the bond calls; cleared by
+  // IndexBonds.
+  bool stale = true;
+  std::vector<int32_t> live;    // index in `bonds` of each intact bond (live)
+  std::vector<int32_t> ia, ib;  // storage index of its spheres a and b (live)
+  // Each particle's bond ends, for the accumulation: particle i owns entries start[i] ..
+  // start[i + 1], each 2 k + side (k: position in live; side 0: a, 1: b), in bond order (N + 1;
+  // 2 live).
+  std::vector<int32_t> start, entry;
+  // This step's results of each live bond (BondForces), summed per particle afterwards.
+  std::vector<Vec3> force_b;               // force on b [N] (live); a feels its opposite
+  std::vector<Vec3> torque_a, torque_b;    // torques about the centres [N m] (live)
+  std::vector<uint8_t> event;              // kBroke | kWakeA | kWakeB (live)
+  std::vector<int32_t> index_of_id, fill;  // IndexBonds' scratch
+};
+
 // The System's working data (see the top of this file). Array shapes: N particles in storage
 // order, num_pairs list pairs, slabs of the neighbour grid.
 struct Workspace {
@@ -261,6 +285,8 @@ struct Workspace {
   std::vector<int32_t> scratch_i32;
   std::vector<Vec3> scratch_v;
   std::vector<uint8_t> scratch_u8, scratch_wake, scratch_zone;
+
+  BondWork bond;
 
   // Per-slab reductions of the force pass (fixed slots, so results do not depend on threads),
   // and their totals.

@@ -11,8 +11,10 @@
 namespace dem {
 namespace {
 
-// Names the layout; change it with any change to StateFields.
-constexpr char kStateFormat[] = "scoopsim dem state 1";
+// Names the layout; change it with any change to StateFields. Version 2 added the bonds at the
+// end (BondFields); a version 1 state (no bonds) is still read.
+constexpr char kStateFormat[] = "scoopsim dem state 2";
+constexpr char kStateFormatNoBonds[] = "scoopsim dem state 1";
 
 template <typename Archive>
 void ParticleFields(Archive& a, Particles& p) {
@@ -92,6 +94,14 @@ void WorkspaceFields(Archive& a, internal::Workspace& m) {
   a(m.max_overlap);
 }
 
+// The bonds and the breaks not yet taken; the rest of Workspace::bond is made again from them.
+template <typename Archive>
+void BondFields(Archive& a, internal::BondWork& w) {
+  a(w.bonds);
+  a(w.breaks);
+  w.stale = true;
+}
+
 }  // namespace
 
 template <typename Archive>
@@ -119,6 +129,7 @@ std::vector<char> System::SaveState() const {
   }
   a(static_cast<uint64_t>(ws_->meshes.size()));
   const_cast<System*>(this)->StateFields(a);  // reads only
+  BondFields(a, ws_->bond);  // marks the bonds' index stale: it is made again alike
   return a.bytes();
 }
 
@@ -126,7 +137,8 @@ void System::RestoreState(const std::vector<char>& bytes) {
   ArchiveReader a(bytes);
   std::string format;
   a(format);
-  if (format != kStateFormat)
+  const bool bonds = format == kStateFormat;
+  if (!bonds && format != kStateFormatNoBonds)
     throw std::runtime_error("state: format '" + format + "', expected '" + kStateFormat + "'");
   uint64_t shapes = 0;
   a(shapes);
@@ -144,6 +156,11 @@ void System::RestoreState(const std::vector<char>& bytes) {
     throw std::runtime_error("state: " + std::to_string(meshes) + " meshes, the system has " +
                              std::to_string(ws_->meshes.size()));
   StateFields(a);
+  if (bonds) {
+    BondFields(a, ws_->bond);
+  } else {
+    ws_->bond = internal::BondWork{};
+  }
   if (!a.done()) throw std::runtime_error("state: bytes left over");
 }
 

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "dem/contact.h"
 #include "dem/internal_phases.h"
@@ -128,6 +130,15 @@ void System::RemoveParticles(const std::vector<int64_t>& requested) {
   m.stale.list = true;
   m.stale.rebuild = true;
   clumps_.Reindex(p_, next_id_);
+  // Their bonds go with them.
+  internal::BondWork& bw = m.bond;
+  if (!bw.bonds.empty()) {
+    size_t kept = 0;
+    for (const Bond& b : bw.bonds)
+      if (!gone[b.a] && !gone[b.b]) bw.bonds[kept++] = b;
+    bw.bonds.resize(kept);
+    bw.stale = true;
+  }
 }
 
 void System::Touch() { ws_->stale.rebuild = true; }
@@ -180,6 +191,7 @@ void System::SetContacts(const std::vector<ContactRecord>& contacts) {
 
 void System::Rebuild(int nt) {
   internal::Rebuild(*ws_, p_, clumps_, config_, next_id_, nt);
+  ws_->bond.stale = true;  // the bonds' storage indices
   ++builds_;
 }
 
@@ -239,6 +251,11 @@ StepStatus System::Step(const std::function<void()>& motion) {
     internal::MeshForces(m, p_, dt, config_.mesh_rolling_torque, nt);
     lap(phase_times_.mesh);
   }
+  // Bonds (dem/bond.h), before the second kick: a clump's EndStep sums its spheres' bond forces.
+  if (!m.bond.bonds.empty()) {
+    internal::BondForces(m, p_, config_.sleep, dt, time_ + dt, nt);
+    lap(phase_times_.bonds);
+  }
 
   // Second half kick (a mesh may have woken particles).
   if (sleeping && m.stale.active) internal::RefreshActive(m, p_, have_clumps, nt);
@@ -291,6 +308,126 @@ MeshWrench System::mesh_wrench(int k) const { return ws_->meshes[k].wrench; }
 
 void System::SetMeshMotion(int k, const MeshMotion& motion) {
   internal::MoveMesh(ws_->meshes[k], motion);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bonds (dem/bond.h; the phase is in dem/bond.cpp).
+
+void System::AddBonds(const std::vector<Bond>& bonds) {
+  // Every bond is checked before any is added.
+  std::vector<int32_t> index(next_id_, -1);
+  for (size_t i = 0; i < p_.size(); ++i) index[p_.id[i]] = static_cast<int32_t>(i);
+  std::vector<std::pair<int64_t, int64_t>> pairs;
+  pairs.reserve(ws_->bond.bonds.size() + bonds.size());
+  for (const Bond& b : ws_->bond.bonds) pairs.emplace_back(b.a, b.b);
+  std::sort(pairs.begin(), pairs.end());
+  const size_t existing = pairs.size();
+  std::vector<Bond> add = bonds;
+  for (size_t k = 0; k < add.size(); ++k) {
+    Bond& b = add[k];
+    const auto fail = [&](const std::string& why) {
+      throw std::invalid_argument("AddBonds: bond " + std::to_string(k) + " (" +
+                                  std::to_string(b.a) + ", " + std::to_string(b.b) + "): " + why);
+    };
+    const auto known = [&](int64_t id) { return id >= 0 && id < next_id_ && index[id] >= 0; };
+    if (!known(b.a) || !known(b.b)) fail("unknown particle id");
+    if (b.a >= b.b) fail(b.a == b.b ? "a sphere bonded to itself" : "ids not in order (a < b)");
+    const int32_t ca = clumps_.ClumpOf(b.a);
+    if (ca >= 0 && ca == clumps_.ClumpOf(b.b))
+      fail("both spheres belong to clump " + std::to_string(ca));
+    if (std::binary_search(pairs.begin(), pairs.begin() + existing, std::make_pair(b.a, b.b)))
+      fail("bonded already");
+    if (!(b.radius > 0 && std::isfinite(b.radius))) fail("radius must be > 0");
+    if (!(b.kn > 0 && std::isfinite(b.kn) && b.ks > 0 && std::isfinite(b.ks)))
+      fail("kn and ks must be > 0");
+    if (!(b.tensile_strength > 0 && b.cohesion > 0)) fail("strengths must be > 0");
+    if (!(b.tan_friction >= 0 && std::isfinite(b.tan_friction))) fail("tan_friction must be >= 0");
+    if (!(b.damping_ratio >= 0 && std::isfinite(b.damping_ratio)))
+      fail("damping_ratio must be >= 0");
+    if (Norm2(b.normal) == 0.0) {
+      const Vec3 d = p_.x[index[b.b]] - p_.x[index[b.a]];
+      if (!(Norm2(d) > 0.0)) fail("the spheres' centres coincide");
+      b.normal = (1.0 / Norm(d)) * d;
+    }
+    pairs.emplace_back(b.a, b.b);
+  }
+  // Pairs repeated within the new bonds.
+  std::sort(pairs.begin() + existing, pairs.end());
+  const auto twice = std::adjacent_find(pairs.begin() + existing, pairs.end());
+  if (twice != pairs.end())
+    throw std::invalid_argument("AddBonds: (" + std::to_string(twice->first) + ", " +
+                                std::to_string(twice->second) + ") bonded twice");
+  internal::BondWork& bw = ws_->bond;
+  bw.bonds.insert(bw.bonds.end(), add.begin(), add.end());
+  bw.stale = true;
+}
+
+const std::vector<Bond>& System::bonds() const { return ws_->bond.bonds; }
+
+int64_t System::intact_bond_count() const {
+  int64_t n = 0;
+  for (const Bond& b : ws_->bond.bonds) n += b.intact;
+  return n;
+}
+
+std::vector<BondBreak> System::TakeBondBreaks() {
+  std::vector<BondBreak> out;
+  out.swap(ws_->bond.breaks);
+  return out;
+}
+
+double System::BondEnergy() const {
+  double e = 0;
+  for (const Bond& b : ws_->bond.bonds)
+    if (b.intact) e += dem::BondEnergy(b);
+  return e;
+}
+
+// A cell search: cells of 2 r_max + gap, each particle against the particles of its own and the
+// 26 neighbouring cells (keys sorted, found by binary search).
+std::vector<std::pair<int64_t, int64_t>> System::PairsWithinGap(double gap) const {
+  if (!(gap >= 0 && std::isfinite(gap)))
+    throw std::invalid_argument("PairsWithinGap: gap must be >= 0, got " + std::to_string(gap));
+  std::vector<std::pair<int64_t, int64_t>> out;
+  const size_t n = p_.size();
+  if (n < 2) return out;
+  double r_max = 0;
+  Vec3 lo = p_.x[0];
+  for (size_t i = 0; i < n; ++i) {
+    r_max = std::max(r_max, p_.radius[i]);
+    lo = Vec3{std::min(lo.x, p_.x[i].x), std::min(lo.y, p_.x[i].y), std::min(lo.z, p_.x[i].z)};
+  }
+  const double cell = 2 * r_max + gap;
+  const auto coord = [&](double x, double l) { return static_cast<int64_t>((x - l) / cell); };
+  const int64_t span = 1 << 20;  // cells per axis in the key (21 bits each)
+  const auto key = [&](int64_t cx, int64_t cy, int64_t cz) { return (cx * span + cy) * span + cz; };
+  std::vector<std::pair<int64_t, int32_t>> keyed(n);
+  for (size_t i = 0; i < n; ++i)
+    keyed[i] = {key(coord(p_.x[i].x, lo.x), coord(p_.x[i].y, lo.y), coord(p_.x[i].z, lo.z)),
+                static_cast<int32_t>(i)};
+  std::sort(keyed.begin(), keyed.end());
+  for (size_t i = 0; i < n; ++i) {
+    const int64_t cx = coord(p_.x[i].x, lo.x), cy = coord(p_.x[i].y, lo.y),
+                  cz = coord(p_.x[i].z, lo.z);
+    for (int64_t dx = -1; dx <= 1; ++dx)
+      for (int64_t dy = -1; dy <= 1; ++dy)
+        for (int64_t dz = -1; dz <= 1; ++dz) {
+          if (cx + dx < 0 || cy + dy < 0 || cz + dz < 0) continue;
+          const int64_t k = key(cx + dx, cy + dy, cz + dz);
+          auto it = std::lower_bound(keyed.begin(), keyed.end(), std::make_pair(k, int32_t{-1}));
+          for (; it != keyed.end() && it->first == k; ++it) {
+            const size_t j = static_cast<size_t>(it->second);
+            if (p_.id[j] <= p_.id[i]) continue;  // each pair once, from its lower id
+            const double reach = p_.radius[i] + p_.radius[j] + gap;
+            if (Norm2(p_.x[j] - p_.x[i]) >= reach * reach) continue;
+            const int32_t ci = clumps_.ClumpOf(p_.id[i]);
+            if (ci >= 0 && ci == clumps_.ClumpOf(p_.id[j])) continue;
+            out.emplace_back(p_.id[i], p_.id[j]);
+          }
+        }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 // ---------------------------------------------------------------------------------------------

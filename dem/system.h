@@ -135,7 +135,8 @@ struct PhaseTimes {
                          // Step()'s `motion` beside them)
   double mesh = 0;       // particle-mesh forces (with the mesh's candidate lists)
   double sleep = 0;      // sleep and wake checks, and the list of awake particles
-  double Total() const { return integrate + rebuild + near + pairs + mesh + sleep; }
+  double bonds = 0;      // the bonds' forces (dem/bond.h) and the index of their spheres
+  double Total() const { return integrate + rebuild + near + pairs + mesh + sleep + bonds; }
 };
 
 // Wrench of the particles on a mesh during the last step, world frame.
@@ -212,16 +213,24 @@ class System {
 
   // Breakable bonds between spheres (dem/bond.h), computed every step after the contacts, in
   // parallel with them. AddBonds throws std::invalid_argument naming the first bond whose ids are
-  // unknown or equal, belong to one clump, or are bonded already. A broken bond stays in bonds()
-  // (intact = false) and never acts again. Removing a particle removes its bonds.
+  // unknown, equal or not in order (a < b), belong to one clump, or are bonded already (one
+  // record a pair, intact or broken), or whose values are out of range (radius, kn, ks,
+  // strengths <= 0 or NaN, tan_friction or damping_ratio < 0); nothing is added then. A bond with
+  // a zero `normal` takes it from the spheres' positions (which must differ). A broken bond stays
+  // in bonds() (intact = false) and never acts again. Removing a particle removes its bonds.
+  // With sleeping, a bond between two sleepers is frozen; an awake end faster than
+  // sleep.wake_speed wakes the other end, a break wakes both.
   void AddBonds(const std::vector<Bond>& bonds);
   const std::vector<Bond>& bonds() const;  // in the order added
   int64_t intact_bond_count() const;
   // The bonds broken since the last call, in the order they broke (within a step, bond order).
   std::vector<BondBreak> TakeBondBreaks();
   // Pairs of spheres (persistent ids, a < b, sorted) whose surfaces are closer than `gap` [m]
-  // (overlapping pairs included), not of one clump: where bonds may be made.
+  // (overlapping pairs included), not of one clump: where bonds may be made. A cell search over
+  // the present positions (any gap >= 0; throws std::invalid_argument on a negative or NaN one).
   std::vector<std::pair<int64_t, int64_t>> PairsWithinGap(double gap) const;
+  // The intact bonds' elastic energy (BondEnergy, dem/bond.h), summed in bond order [J].
+  double BondEnergy() const;
 
   // Sleeping (SleepConfig); may be switched on and off between steps.
   void set_sleep(const SleepConfig& sleep);
@@ -248,7 +257,8 @@ class System {
   double ElasticEnergy() const;    // normal Hertz energy 2/5 k delta^(5/2) of current contacts [J]
   Vec3 Momentum() const;           // [kg m/s]
   // FNV-1a 64 hash of (id, x, v, w, radius, material) in persistent-id order, of the clumps'
-  // (x, v, q, L) and of the time.
+  // (x, v, q, L) and of the time; with bonds, then of each bond's (a, b, intact, fn, fs, mt, mb)
+  // in bond order (without any, the hash is what it was before bonds existed).
   uint64_t StateHash() const;
 
   // Worker threads (the most a step uses). With adaptive threads a ThreadGovernor picks each

@@ -100,6 +100,17 @@ uint64_t System::StateHash() const {
     mix(&c.l[k], sizeof(Vec3));
   }
   mix(&time_, sizeof(double));
+  // Bonds, only when there are any (an unbonded run hashes as it did before bonds).
+  for (const Bond& b : ws_->bond.bonds) {
+    mix(&b.a, sizeof(int64_t));
+    mix(&b.b, sizeof(int64_t));
+    const uint8_t intact = b.intact;
+    mix(&intact, 1);
+    mix(&b.fn, sizeof(double));
+    mix(&b.fs, sizeof(Vec3));
+    mix(&b.mt, sizeof(double));
+    mix(&b.mb, sizeof(Vec3));
+  }
   return h;
 }
 

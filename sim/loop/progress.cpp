@@ -152,13 +152,10 @@ struct NamedPhase {
 };
 
 std::vector<NamedPhase> Named(const dem::PhaseTimes& p, double wall) {
-  return {{"pairs", p.pairs},
-          {"integrate", p.integrate},
-          {"rebuild", p.rebuild},
-          {"near", p.near},
-          {"mesh", p.mesh},
-          {"sleep", p.sleep},
-          {"other", std::max(0.0, wall - p.Total())}};
+  return {{"pairs", p.pairs},     {"integrate", p.integrate},
+          {"rebuild", p.rebuild}, {"near", p.near},
+          {"mesh", p.mesh},       {"sleep", p.sleep},
+          {"bonds", p.bonds},     {"other", std::max(0.0, wall - p.Total())}};
 }
 
 }  // namespace
@@ -171,6 +168,7 @@ dem::PhaseTimes PhasesSince(const dem::PhaseTimes& now, const dem::PhaseTimes& b
   d.pairs = now.pairs - before.pairs;
   d.mesh = now.mesh - before.mesh;
   d.sleep = now.sleep - before.sleep;
+  d.bonds = now.bonds - before.bonds;
   return d;
 }
 
