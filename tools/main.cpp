@@ -779,24 +779,23 @@ Command CalibrateBonds(CLI::App* calibrate) {
   };
   auto args = std::make_shared<Args>();
   sim::BondCalibrationOptions& o = args->options;
-  o.bond.tensile_strength = 1e6;
-  o.bond.cohesion = 1e6;
+  o.bond.tensile_strength = 2e4;  // sigma_c / G = 2e-3 at the materials' G = 1e7 Pa
+  o.bond.cohesion = 2e4;
   CLI::App* command = calibrate->add_subcommand(
       "bonds",
       "Bond calibration (issue 44; Potyondy & Cundall 2004, Int. J. Rock Mech. Min. Sci. 41, "
       "1329, section 3): a dense random packing of the material's spheres, bonded (dem/bond.h), "
       "crushed between two platens as a prism (H = 2 W: unconfined compression, UCS = P_peak / "
-      "W^2, and Young's modulus E from the stress-strain slope) and as a disk (Brazilian test, "
-      "sigma_t = 2 P_peak / (pi D t), ISRM 1978), once per strength scale: a CSV table (-o) and "
-      "a line per row on stdout. To aim at a literature value, run one scale, then scale the "
-      "strengths by target / measured (UCS and sigma_t are proportional to the bond strengths at "
-      "fixed stiffness) and check with a second run; the modulus sets E and, with the particles' "
-      "G, the time step. Targets: polycrystalline ice at -10 to -20 C has a compressive strength "
-      "of 5-25 MPa and a tensile strength of 0.7-3.1 MPa (Petrovic 2003, J. Mater. Sci. 38, 1-6, "
-      "doi:10.1023/A:1021134128038); snow, an open cellular form of ice, is far weaker (sintered "
-      "snow ~10 kPa to ~1 MPa in compression, rising with density and age). A bonded-particle "
-      "model's UCS / sigma_t is ~3-5, below real ice's ~5-10: calibrate on the strength that "
-      "matters for the dig (the scoop's cut is mostly tensile and shear) and say which.");
+      "W^2, and Young's modulus E from the stress against the strain of the sample's middle "
+      "half) and as a disk with two 30 deg flats (Brazilian test, sigma_t = 2 P_peak / (pi D t), "
+      "ISRM 1978), once per strength scale: a CSV table (-o) and a line per row on stdout. To aim "
+      "at a literature value, sweep --scales over the range that brackets it and interpolate "
+      "(the measured strengths are not yet proportional to the bond strengths: docs/studies.md); "
+      "the modulus sets E and, with the particles' G, the time step; a strong sample needs a G "
+      "that keeps the platens' Hertz overlaps small (--shear-modulus). Targets: polycrystalline "
+      "ice at -10 to -20 C has a compressive strength of 5-25 MPa and a tensile strength of "
+      "0.7-3.1 MPa (Petrovic 2003, J. Mater. Sci. 38, 1-6, doi:10.1023/A:1021134128038); snow, "
+      "an open cellular form of ice, is far weaker (Petrovic 2003).");
   command->add_option("--material", o.material, "A material of the materials file")
       ->capture_default_str();
   command->add_option("--materials", o.materials_path,
@@ -858,6 +857,11 @@ Command CalibrateBonds(CLI::App* calibrate) {
   command
       ->add_option("--stop-fraction", o.test.stop_fraction,
                    "Stop once the load has fallen below this fraction of its peak")
+      ->capture_default_str();
+  command
+      ->add_option("--platen-softness", o.test.platen_softness,
+                   "The platens' G over the particles' G: below 1, a soft bearing strip (ASTM "
+                   "D3967's cardboard) that spreads the load over the sample's end spheres")
       ->capture_default_str();
   command->add_flag("--rate-check", o.rate_check,
                     "Run the first scale again at half the speed and report the change");

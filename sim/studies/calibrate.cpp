@@ -46,6 +46,7 @@ constexpr double kTransits = 100;
 // 1e-3 of a radius at G = 1e7 Pa), done when every sphere is slower than kQuiet sqrt(2 g r).
 constexpr double kSettleGravity = 4 * 9.81;  // [m/s^2]
 constexpr double kQuiet = 0.02;              // [-]
+constexpr double kPrepShearModulus = 1e7;    // [Pa]
 
 double CpuNow() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
@@ -154,8 +155,12 @@ BondSample SettleAndCut(const BondSampleSpec& spec, BondSampleShape shape) {
     box_height *= 1.25;
   }
 
+  // The packing is made with G at most kPrepShearModulus: its geometry is all that is kept, and
+  // the settling's steps grow as sqrt(G) (its time is gravity's).
+  dem::Material prep_material = spec.material;
+  prep_material.shear_modulus = std::min(prep_material.shear_modulus, kPrepShearModulus);
   dem::MaterialTable table;
-  const int m = table.Add(spec.material);
+  const int m = table.Add(prep_material);
   dem::Interaction settle = spec.interaction;
   settle.restitution = 0.2;
   settle.friction = 0;
@@ -163,7 +168,7 @@ BondSample SettleAndCut(const BondSampleSpec& spec, BondSampleShape shape) {
   table.SetInteraction(m, m, settle);
   dem::SystemConfig config;
   config.gravity = {0, 0, -kSettleGravity};
-  config.time_step = 0.2 * dem::RayleighTimeStep(r_min, spec.material);
+  config.time_step = 0.2 * dem::RayleighTimeStep(r_min, prep_material);
   config.skin = 0.5 * r;
   const double margin = 4 * r_max;
   config.domain_min = {-margin, -margin, -margin};
@@ -267,6 +272,7 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
   const int m = table.Add(sample.material);
   dem::Material platen_material = sample.material;
   platen_material.name = "platen";
+  platen_material.shear_modulus *= spec.platen_softness;
   const int mp = table.Add(platen_material);
   table.SetInteraction(m, m, spec.interaction);
   // The prism's platens are frictionless (the end condition of Potyondy & Cundall's tests: no
@@ -563,7 +569,8 @@ std::string BondCalibrationCommandLine(const BondCalibrationOptions& o) {
     << " --friction-angle " << Num(o.bond.friction_angle / kDeg) << " --damping-ratio "
     << Num(o.bond.damping_ratio) << " --gap-fraction " << Num(o.gap_fraction) << " --scales "
     << list(o.scales) << " --rayleigh-fraction " << Num(o.test.rayleigh_fraction)
-    << " --speed-factor " << Num(o.test.speed_factor) << " --max-strain " << Num(o.test.max_strain)
+    << " --speed-factor " << Num(o.test.speed_factor) << " --platen-softness "
+    << Num(o.test.platen_softness) << " --max-strain " << Num(o.test.max_strain)
     << " --stop-fraction " << Num(o.test.stop_fraction);
   if (o.rate_check) s << " --rate-check";
   s << " -o " << o.output;
@@ -627,6 +634,8 @@ int RunBondCalibration(const BondCalibrationOptions& given) {
         o.test.max_strain);
   Check(o.test.stop_fraction > 0 && o.test.stop_fraction < 1, "--stop-fraction",
         "a number in (0, 1)", o.test.stop_fraction);
+  Check(o.test.platen_softness >= 1e-4 && o.test.platen_softness <= 1e4, "--platen-softness",
+        "a number in [1e-4, 1e4]", o.test.platen_softness);
   CheckWritable(o.output);
 
   // The samples, made once.
@@ -660,12 +669,13 @@ int RunBondCalibration(const BondCalibrationOptions& given) {
   header.push_back("bonds between spheres closer than gap " + Num(gap) +
                    " m; strengths = scale x (tensile_strength, cohesion)");
   header.push_back(
-      "UCS = peak platen force / W^2; sigma_t = 2 P / (pi D t) (ISRM 1978); E_sample = "
-      "least-squares slope of stress against platen strain over 10-50% of UCS before the peak");
+      "UCS = peak platen force / W^2; sigma_t = 2 P / (pi D t) (ISRM 1978, on a disk with two "
+      "30 deg flats); E_sample = least-squares slope of stress against the gauge strain (the "
+      "sample's middle half) over 10-50% of UCS before the peak; strain_at_peak: the platens'");
   header.push_back(
       "platen speed v = speed_factor x min(sigma_c / E_b, max_strain) x "
-      "sqrt(E_b / rho) / 100; stop: load < stop_fraction x peak after a break "
-      "(failed), or max_strain (limit)");
+      "sqrt(E_b / rho) / 100; stop: load < stop_fraction x peak after a break, the platens "
+      "1.5x as far as at the peak (failed), or max_strain (limit)");
   if (!o.quiet)
     std::fprintf(stderr, "scoopsim: %s\nscoopsim: %s\n", header[1].c_str(), header[2].c_str());
 

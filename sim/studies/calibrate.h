@@ -5,38 +5,51 @@
 // calibrate bonds` (tools/main.cpp) runs it.
 //
 // Samples (MakeBondSample): spheres of radii uniform in r (1 -/+ spread) are put on a jittered
-// lattice (dem::InsertSpheres) in a box of planes and settled under gravity with frictionless,
-// strongly damped contacts (a dense random packing, solid fraction ~0.6); the spheres are then
-// cut to the sample's shape:
-//   compression  a square prism W x W x H, H = 2 W (spheres whose top lies under the floor + H);
+// lattice (dem::InsertSpheres) in a box of planes and settled under 4 g with frictionless,
+// strongly damped contacts (G at most 1e7 Pa: only the geometry is kept), then a lid comes down
+// onto them to the sample's height (or until it bears the weight's pressure), so that the top is
+// as flat as the floor (a dense random packing, solid fraction ~0.6); the spheres are then cut
+// to the shape:
+//   compression  a square prism W x W x H, H = 2 W (the box itself, lidded: all its spheres);
 //   Brazilian    a disk of diameter D and thickness t = D / 2 (ISRM's t/D ~ 0.5), its axis along
-//                y, horizontal (spheres lying wholly inside the circle, settled in a D x t box).
+//                y, horizontal: a D x t slab lidded at D cos(15 deg) and cut to the circle, so
+//                that it has two flats of 2 alpha = 30 deg where the platens bear (a flattened
+//                Brazilian disc; a round disk of coarse spheres touches a platen on one sphere).
 // W and D are chosen so that each sample holds about `particles` spheres.
 //
-// A test (RunPlatenTest): the sample without gravity, every pair of spheres whose surfaces are
-// closer than `gap` bonded (System::PairsWithinGap, dem::MakeBond with the row's strength
-// scale), between two rigid square platens (triangle meshes of a frictionless material with the
-// particles' elastic constants) that start at the sample's lowest and highest points and close
-// at a constant speed v, v/2 each. The load P is the mean of the two platens' normal forces; the
-// strain is the platens' travel over the sample's height at the start, eps = v t / h0. The test
-// stops once P has fallen below `stop_fraction` of its peak with bonds broken (failure), or at
-// `max_strain` (the platen limit: unbreakable bonds end there).
+// A test (RunPlatenTest): the sample without gravity relaxes unbonded for 500 steps and is
+// stopped; every pair of spheres whose surfaces are closer than `gap` is bonded
+// (System::PairsWithinGap, dem::MakeBond with the row's strength scale), spheres left with fewer
+// than 3 bonds removed first (Potyondy & Cundall's "floaters"); it lies between two rigid square
+// platens (triangle meshes with the particles' elastic constants: frictionless for the prism,
+// the particles' friction for the disk) that start at its lowest and highest points and close at
+// a constant speed v, v/2 each. The load P is the mean of the two platens' normal forces, averaged
+// over blocks of one wave transit of the sample; the platen strain is the platens' travel over
+// the sample's height at the start, eps = v t / h0. The test stops once P has fallen below
+// `stop_fraction` of its peak with bonds broken and the platens half as far again as at the peak
+// (failure), or at `max_strain` (the platen limit: unbreakable bonds end there).
 //   UCS        = P_peak / W^2                              (the prism's cross-section)
 //   sigma_t    = 2 P_peak / (pi D t)                       (ISRM 1978 suggested method, Brazilian)
-//   E_sample   = least-squares slope of sigma = P / W^2 against eps over the points before the
-//                peak with sigma in [0.1, 0.5] UCS          (compression only)
-// Quasi-static loading: the speed is v = speed_factor x eps_ref c / (kTransits) with
+//   E_sample   = least-squares slope of sigma = P / W^2 against the gauge strain over the blocks
+//                before the peak with sigma in [0.1, 0.5] UCS (compression only). The gauge
+//                strain is that between the mean heights of the spheres starting in the bands at
+//                20-30% and 70-80% of the height, as a lab's gauges on the middle of a sample: the
+//                platen strain also holds the ends' seating on their first few Hertz contacts,
+//                most of the platen travel at first.
+// Quasi-static loading: the speed is v = speed_factor x eps_ref c / kTransits with
 // c = sqrt(E_b / rho) the bond material's wave speed and eps_ref = min(sigma_c / E_b, max_strain)
 // the strain at which a lone bond would break in tension: the platens close by eps_ref in
 // kTransits = 100 wave transits of the sample's height. The loading's time scale thus follows the
-// strength (each row the same number of steps to its peak); halving the speed (--rate-check)
-// shows how far the peak still depends on it.
+// strength (each row about the same number of steps to its peak); halving the speed
+// (--rate-check) shows how far the peak still depends on it.
 //
 // What a user does with it: pick the material, the sphere size and the bond's modulus and
-// strength ratios, sweep the strength scale, read off the scale that gives the literature's UCS
-// (or tensile strength), and put that strength in the scene's bed.bonds. UCS and sigma_t are
-// proportional to the bond strengths at fixed stiffness and geometry (Potyondy & Cundall 2004,
-// section 3.1), so one row usually suffices to aim: scale = target UCS / measured UCS.
+// strength ratios, sweep the strength scale over a range that brackets the literature's UCS (or
+// tensile strength), interpolate, and put that strength in the scene's bed.bonds. BPM theory
+// makes UCS and sigma_t proportional to the bond strengths at fixed stiffness and geometry
+// (Potyondy & Cundall 2004, section 3.1); these samples are not there yet (their ends, a few
+// Hertz contacts on each platen, set the peak: tests/sim/calibrate_test.cpp's disabled tests
+// give the figures), so one row is not enough to aim.
 #pragma once
 
 #include <cstdint>
@@ -88,6 +101,9 @@ struct PlatenTestSpec {
   double speed_factor = 1;         // v = speed_factor x the quasi-static speed above [-]
   double max_strain = 0.05;        // the platen limit [-]
   double stop_fraction = 0.5;      // stop once P < this x peak after bonds broke [-]
+  // The platens' G over the particles' [-]: below 1, a soft bearing strip between platen and
+  // sample (ASTM D3967's cardboard), which spreads the load over the end's spheres.
+  double platen_softness = 1;
   int threads = 1;
 };
 
