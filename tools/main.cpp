@@ -14,6 +14,7 @@
 //                                            the particle-size study (eq. 5-7; CSV, table, PNGs)
 //   scoopsim sweep SWEEP.yaml -o DIR; scoopsim table build|query|export-csv (tools/sweep_cli.h)
 //   scoopsim arm info URDF [--gravity G]     the parsed arm and its gravity torques
+//   scoopsim calibrate bonds [--material M] [--scales A,B] ...   bond strength -> UCS, sigma_t, E
 // Each subcommand is one function (its options, then how it runs), registered in kCommands; Main
 // sets them all up, parses, and runs the one given.
 // Exit status: sim/input/exit_status.h (0 success, 1 runtime failure, 2 bad input, 3 unstable, 4
@@ -47,6 +48,7 @@
 #include "sim/input/exit_status.h"
 #include "sim/input/scene.h"
 #include "sim/loop/preflight.h"
+#include "sim/studies/calibrate.h"
 #include "sim/studies/commands.h"
 #include "tools/arm_info.h"
 #include "tools/cli_checks.h"
@@ -768,6 +770,118 @@ Command ExportRosbag(CLI::App* exporter) {
           nullptr};
 }
 
+// `scoopsim calibrate bonds`: the bond parameters -> UCS, Brazilian tensile strength and E of a
+// bonded sample (sim/studies/calibrate.h).
+Command CalibrateBonds(CLI::App* calibrate) {
+  struct Args {
+    sim::BondCalibrationOptions options;
+    double friction_angle_deg = 0;
+    int threads = 1;
+  };
+  auto args = std::make_shared<Args>();
+  sim::BondCalibrationOptions& o = args->options;
+  o.bond.tensile_strength = 2e4;  // sigma_c / G = 2e-3 at the materials' G = 1e7 Pa
+  o.bond.cohesion = 2e4;
+  CLI::App* command = calibrate->add_subcommand(
+      "bonds",
+      "Bond calibration (issue 44; Potyondy & Cundall 2004, Int. J. Rock Mech. Min. Sci. 41, "
+      "1329, section 3): a dense random packing of the material's spheres, bonded (dem/bond.h), "
+      "crushed between two platens as a prism (H = 2 W: unconfined compression, UCS = P_peak / "
+      "W^2, and Young's modulus E from the stress against the strain of the sample's middle "
+      "half) and as a disk with two 30 deg flats (Brazilian test, sigma_t = 2 P_peak / (pi D t), "
+      "ISRM 1978), once per strength scale: a CSV table (-o) and a line per row on stdout. To aim "
+      "at a literature value, sweep --scales over the range that brackets it and interpolate "
+      "(the measured strengths are not yet proportional to the bond strengths: docs/studies.md); "
+      "the modulus sets E and, with the particles' G, the time step; a strong sample needs a G "
+      "that keeps the platens' Hertz overlaps small (--shear-modulus). Targets: polycrystalline "
+      "ice at -10 to -20 C has a compressive strength of 5-25 MPa and a tensile strength of "
+      "0.7-3.1 MPa (Petrovic 2003, J. Mater. Sci. 38, 1-6, doi:10.1023/A:1021134128038); snow, "
+      "an open cellular form of ice, is far weaker (Petrovic 2003).");
+  command->add_option("--material", o.material, "A material of the materials file")
+      ->capture_default_str();
+  command->add_option("--materials", o.materials_path,
+                      "Materials file (default: the source tree's scenes/materials.yaml)");
+  command
+      ->add_option("--shear-modulus", o.shear_modulus,
+                   "G of the particles [Pa] (default: the material's); the platens carry the "
+                   "sample's whole load through Hertz contacts, so a strong sample needs a G "
+                   "that keeps those overlaps small")
+      ->check(tools::FinitePositive("Pa"));
+  command->add_option("--radius", o.sample.radius, "Mean sphere radius r [m]")
+      ->capture_default_str()
+      ->check(tools::FinitePositive("m"));
+  command->add_option("--spread", o.sample.spread, "Radii uniform in r (1 -/+ spread)")
+      ->capture_default_str();
+  command->add_option("--particles", o.sample.particles, "Spheres per sample, about")
+      ->capture_default_str();
+  command->add_option("--seed", o.sample.seed, "Seed of the packing")->capture_default_str();
+  command
+      ->add_option("--modulus", o.bond.modulus,
+                   "Bond modulus E_b [Pa] (default: the particles' Young's modulus 2 G (1 + nu))")
+      ->check(tools::FinitePositive("Pa"));
+  command->add_option("--radius-multiplier", o.bond.radius_multiplier, "Bond radius lambda [-]")
+      ->capture_default_str();
+  command->add_option("--stiffness-ratio", o.bond.stiffness_ratio, "k_n / k_s [-]")
+      ->capture_default_str();
+  command
+      ->add_option("--tensile-strength", o.bond.tensile_strength,
+                   "Bond tensile strength sigma_c at scale 1 [Pa] (inf: unbreakable)")
+      ->capture_default_str();
+  command
+      ->add_option("--cohesion", o.bond.cohesion,
+                   "Bond cohesion c at scale 1 [Pa] (inf: unbreakable)")
+      ->capture_default_str();
+  command->add_option("--friction-angle", args->friction_angle_deg, "Bond friction angle phi [deg]")
+      ->capture_default_str();
+  command->add_option("--damping-ratio", o.bond.damping_ratio, "Bond damping, of critical [-]")
+      ->capture_default_str();
+  command
+      ->add_option("--gap-fraction", o.gap_fraction,
+                   "Bond the spheres whose surfaces are closer than this x r [-]")
+      ->capture_default_str();
+  command
+      ->add_option("--scales", o.scales,
+                   "Strength scales, comma separated: each row multiplies the tensile strength "
+                   "and cohesion by one")
+      ->delimiter(',');
+  command
+      ->add_option("--rayleigh-fraction", o.test.rayleigh_fraction,
+                   "dt = min(this x t_R, the bond's critical step)")
+      ->capture_default_str();
+  command
+      ->add_option("--speed-factor", o.test.speed_factor,
+                   "Platen speed over the quasi-static one (the platens close by sigma_c / E_b in "
+                   "100 wave transits of the sample)")
+      ->capture_default_str();
+  command->add_option("--max-strain", o.test.max_strain, "Platen limit: stop at this strain")
+      ->capture_default_str();
+  command
+      ->add_option("--stop-fraction", o.test.stop_fraction,
+                   "Stop once the load has fallen below this fraction of its peak")
+      ->capture_default_str();
+  command
+      ->add_option("--platen-softness", o.test.platen_softness,
+                   "The platens' G over the particles' G: below 1, a soft bearing strip (ASTM "
+                   "D3967's cardboard) that spreads the load over the sample's end spheres")
+      ->capture_default_str();
+  command->add_flag("--rate-check", o.rate_check,
+                    "Run the first scale again at half the speed and report the change");
+  command->add_option("--threads", args->threads, "DEM threads; 0 = all cores")
+      ->capture_default_str()
+      ->check(CLI::Range(0, kMaxThreads));
+  command->add_option("-o,--output", o.output, "The CSV table")->capture_default_str();
+  command->add_flag("-q,--quiet", o.quiet, "No sample lines on stderr");
+  return {Given(command),
+          [args] {
+            sim::BondCalibrationOptions options = args->options;
+            constexpr double kDeg = 3.14159265358979323846 / 180;
+            options.bond.friction_angle = args->friction_angle_deg * kDeg;
+            options.test.threads = args->threads > 0 ? args->threads : AllCores();
+            return sim::RunBondCalibration(options);
+          },
+          nullptr};
+}
+
 // Commands that hold subcommands (`scoopsim study shape`), made when their first one is added.
 struct Group {
   const char* name;
@@ -778,6 +892,7 @@ constexpr Group kGroups[] = {
     {"bench", "Benchmarks"},
     {"arm", "The arm alone (its URDF), without the DEM"},
     {"export", "A saved run in other tools' formats"},
+    {"calibrate", "Calibrations of the material models against laboratory tests"},
 };
 
 // Every subcommand, in the order of --help: its group ("" for a top-level command) and setup.
@@ -799,6 +914,7 @@ constexpr Entry kCommands[] = {
     {"", SweepAndTable},
     {"arm", ArmInfo},
     {"export", ExportRosbag},
+    {"calibrate", CalibrateBonds},
 };
 
 int Main(int argc, char** argv) {
