@@ -369,6 +369,8 @@ const std::vector<Bond>& System::bonds() const {
   return ws_->bond.bonds;
 }
 
+int64_t System::bond_count() const { return static_cast<int64_t>(ws_->bond.bonds.size()); }
+
 int64_t System::intact_bond_count() const {
   ws_->bond.Sync();
   int64_t n = 0;

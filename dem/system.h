@@ -222,6 +222,9 @@ class System {
   // sleep.wake_speed wakes the other end, a break wakes both.
   void AddBonds(const std::vector<Bond>& bonds);
   const std::vector<Bond>& bonds() const;  // in the order added
+  // How many bonds were added, intact or broken (cheap: bonds() first copies the step's state
+  // back into the record, which a per-step check should not pay for).
+  int64_t bond_count() const;
   int64_t intact_bond_count() const;
   // The bonds broken since the last call, in the order they broke (within a step, bond order).
   std::vector<BondBreak> TakeBondBreaks();

@@ -429,7 +429,7 @@ void World::RecordPlainRow() {
 }
 
 void World::RecordBondRow() {
-  if (system_->bonds().empty()) return;
+  if (system_->bond_count() == 0) return;
   const double t = system_->time();
   const double intact = static_cast<double>(system_->intact_bond_count());
   out_->AppendRow("/bonds/time", &t, 1);
@@ -437,7 +437,7 @@ void World::RecordBondRow() {
 }
 
 void World::RecordBondBreaks() {
-  if (system_->bonds().empty()) return;
+  if (system_->bond_count() == 0) return;
   // Taken every step, written or not, so that none waits in the system (a checkpoint then holds
   // none pending) and the live view's counts come from bonds() alone.
   const std::vector<dem::BondBreak> breaks = system_->TakeBondBreaks();
