@@ -102,9 +102,10 @@ Bond MakeBond(int64_t ida, double ra, int64_t idb, double rb, double distance,
 // The largest step at which velocity Verlet integrates bonded spheres stably: for two equal
 // spheres of `radius` and `density` bonded with `params` at distance 2 r, 2 / omega_max over the
 // bond's translational and rotational modes (the shear spring's moment arm included, and the
-// damping's share), divided by sqrt(12) for a sphere's many bonds (a rigorous bound for up to 12
-// bonds a sphere). The derivation is written at the definition; a test steps a bonded lattice at
-// it (energy conserved) and at 3x it (unstable). The smallest spheres give the smallest step. [s]
+// damping's share), divided by sqrt(12) for a sphere's many bonds (a bound for up to 12 bonds a
+// sphere; an fcc lattice goes unstable from 1.5x it). The derivation and measurements are written
+// at the definition; a test steps a bonded lattice at it (energy kept) and at 3x it (unstable).
+// The smallest spheres give the smallest step. [s]
 double BondCriticalStep(double radius, double density, const BondParams& params);
 
 // The bond's elastic energy (above) [J].

@@ -60,7 +60,8 @@ void NeighborList::SlabSpan(const Vec3& lo, const Vec3& hi, int* first, int* las
 }
 
 void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit,
-                                std::vector<int32_t>* perm, int num_threads, const uint8_t* awake) {
+                                std::vector<int32_t>* perm, int num_threads,
+                                const uint8_t* awake) {
   const int64_t n = static_cast<int64_t>(visit.size());
   const int64_t per_slab = static_cast<int64_t>(n_[1]) * n_[2];
   std::vector<int64_t> key(n);
@@ -107,9 +108,9 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
   };
   constexpr int kOwnHalf = -1;
   static constexpr RunSpec kRuns[11] = {
-      {0, kOwnHalf, 0, 0}, {0, kOwnHalf, 1, -1},                  // own half, later cells
-      {0, 1, -1, -1},      {0, 1, 0, -1},        {0, 1, 1, -1},   // own slab's asleep half
-      {1, 0, -1, -1},      {1, 0, 0, -1},        {1, 0, 1, -1},   // next slab, awake half
+      {0, kOwnHalf, 0, 0}, {0, kOwnHalf, 1, -1},                   // own half, later cells
+      {0, 1, -1, -1},      {0, 1, 0, -1},        {0, 1, 1, -1},    // own slab's asleep half
+      {1, 0, -1, -1},      {1, 0, 0, -1},        {1, 0, 1, -1},    // next slab, awake half
       {1, 1, -1, -1},      {1, 1, 0, -1},        {1, 1, 1, -1}};  // next slab, asleep half
   const auto cell_of = [&](int slab, int half, int b, int c) {
     return ((static_cast<int64_t>(2 * slab + half)) * n1 + b) * n2 + c;

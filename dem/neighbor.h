@@ -3,10 +3,10 @@
 //
 // Parallel, deterministic force accumulation rests on this layout: particles are sorted by slab
 // (one axis, the one with most cells, varying slowest; within a slab by cell, awake particles
-// first), and the cells are at least one cutoff wide. A pair (i, j > i) then has j in the slab of i
-// or in the next one, so processing even slabs in parallel and then odd slabs never writes one
-// particle from two threads, and the order in which forces add up is fixed by the data alone,
-// whatever the thread count. Public header of the dem module.
+// first), and the cells are at least one cutoff wide. A pair (i, j > i) then has j in the slab of i or in the next one, so
+// processing even slabs in parallel and then odd slabs never writes one particle from two threads,
+// and the order in which forces add up is fixed by the data alone, whatever the thread count.
+// Public header of the dem module.
 #pragma once
 
 #include <cstdint>

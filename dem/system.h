@@ -221,7 +221,9 @@ class System {
   // With sleeping, a bond between two sleepers is frozen; an awake end faster than
   // sleep.wake_speed wakes the other end, a break wakes both.
   void AddBonds(const std::vector<Bond>& bonds);
-  const std::vector<Bond>& bonds() const;  // in the order added
+  // In the order added, with their states as of the last step (the step works on a copy in
+  // storage order and brings the records up to date here: take the reference afresh after a step).
+  const std::vector<Bond>& bonds() const;
   // How many bonds were added, intact or broken (cheap: bonds() first copies the step's state
   // back into the record, which a per-step check should not pay for).
   int64_t bond_count() const;
