@@ -486,7 +486,9 @@ TEST(BondsTest, BondedRunOutputsSurviveSigterm) {
     EXPECT_LT(s.broken_a[k], s.broken_b[k]);
     EXPECT_TRUE(s.broken_mode[k] == 1 || s.broken_mode[k] == 2);
     EXPECT_GT(s.broken_stress[k], 0.0);
-    if (k > 0) EXPECT_GE(s.broken_time[k], s.broken_time[k - 1]);
+    if (k > 0) {
+      EXPECT_GE(s.broken_time[k], s.broken_time[k - 1]);
+    }
   }
   // Rows and records flush together: the breaks up to the last row's time account for its
   // count.
