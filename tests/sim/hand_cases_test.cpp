@@ -194,7 +194,7 @@ const std::vector<Row>& Rows() {
       // Was "A subcommand is required".
       {"frobnicate x", 2,
        "scoopsim: COMMAND: expected one of bed, run, check, render, study, bench, sweep, table, "
-       "arm, export, got 'frobnicate'"},
+       "arm, export, calibrate, got 'frobnicate'"},
       {"study nope x", 2,
        "scoopsim: study COMMAND: expected one of shape, balovnev, particle-size, got 'nope'"},
       // Were silent (exit 0).
