@@ -372,6 +372,9 @@ const std::vector<Bond>& System::bonds() const {
 int64_t System::bond_count() const { return static_cast<int64_t>(ws_->bond.bonds.size()); }
 
 int64_t System::intact_bond_count() const {
+  // While the bond pass's index is current its live list is the intact bonds; after a step that
+  // broke some (or any other change) they are counted from the record.
+  if (!ws_->bond.stale) return static_cast<int64_t>(ws_->bond.live.size());
   ws_->bond.Sync();
   int64_t n = 0;
   for (const Bond& b : ws_->bond.bonds) n += b.intact;
