@@ -786,14 +786,13 @@ Command CalibrateBonds(CLI::App* calibrate) {
       "bonds",
       "Bond calibration (issue 44; Potyondy & Cundall 2004, Int. J. Rock Mech. Min. Sci. 41, "
       "1329, section 3): a dense random packing of the material's spheres, bonded (dem/bond.h), "
-      "crushed between two platens as a prism (H = 2 W: unconfined compression, UCS = P_peak / "
+      "crushed between gripped ends as a prism (H = 2 W: unconfined compression, UCS = P_peak / "
       "W^2, and Young's modulus E from the stress against the strain of the sample's middle "
-      "half) and as a disk with two 30 deg flats (Brazilian test, sigma_t = 2 P_peak / (pi D t), "
-      "ISRM 1978), once per strength scale: a CSV table (-o) and a line per row on stdout. To aim "
-      "at a literature value, sweep --scales over the range that brackets it and interpolate "
-      "(the measured strengths are not yet proportional to the bond strengths: docs/studies.md); "
-      "the modulus sets E and, with the particles' G, the time step; a strong sample needs a G "
-      "that keeps the platens' Hertz overlaps small (--shear-modulus). Targets: polycrystalline "
+      "half) and as a disk gripped at two 30 deg flats (Brazilian test, sigma_t = 2 P_peak / (pi "
+      "D t), ISRM 1978), once per strength scale: a CSV table (-o) and a line per row on stdout. "
+      "The strengths are proportional to the bond strengths: to aim at a literature value, scale "
+      "the bond strengths by its ratio to a measured row (docs/bonds.md); the modulus sets E and, "
+      "with the particles' G, the time step. Targets: polycrystalline "
       "ice at -10 to -20 C has a compressive strength of 5-25 MPa and a tensile strength of "
       "0.7-3.1 MPa (Petrovic 2003, J. Mater. Sci. 38, 1-6, doi:10.1023/A:1021134128038); snow, "
       "an open cellular form of ice, is far weaker (Petrovic 2003).");
@@ -803,9 +802,8 @@ Command CalibrateBonds(CLI::App* calibrate) {
                       "Materials file (default: the source tree's scenes/materials.yaml)");
   command
       ->add_option("--shear-modulus", o.shear_modulus,
-                   "G of the particles [Pa] (default: the material's); the platens carry the "
-                   "sample's whole load through Hertz contacts, so a strong sample needs a G "
-                   "that keeps those overlaps small")
+                   "G of the particles [Pa] (default: the material's): the Hertz contacts "
+                   "between the spheres, in parallel with the bonds")
       ->check(tools::FinitePositive("Pa"));
   command->add_option("--radius", o.sample.radius, "Mean sphere radius r [m]")
       ->capture_default_str()
@@ -850,19 +848,16 @@ Command CalibrateBonds(CLI::App* calibrate) {
       ->capture_default_str();
   command
       ->add_option("--speed-factor", o.test.speed_factor,
-                   "Platen speed over the quasi-static one (the platens close by sigma_c / E_b in "
-                   "100 wave transits of the sample)")
+                   "Grip speed over the quasi-static one (the gripped ends close by sigma_c / E_b "
+                   "in 100 wave transits of the sample)")
       ->capture_default_str();
-  command->add_option("--max-strain", o.test.max_strain, "Platen limit: stop at this strain")
+  command
+      ->add_option("--max-strain", o.test.max_strain,
+                   "Strain limit: stop at this strain of the grips")
       ->capture_default_str();
   command
       ->add_option("--stop-fraction", o.test.stop_fraction,
                    "Stop once the load has fallen below this fraction of its peak")
-      ->capture_default_str();
-  command
-      ->add_option("--platen-softness", o.test.platen_softness,
-                   "The platens' G over the particles' G: below 1, a soft bearing strip (ASTM "
-                   "D3967's cardboard) that spreads the load over the sample's end spheres")
       ->capture_default_str();
   command->add_flag("--rate-check", o.rate_check,
                     "Run the first scale again at half the speed and report the change");

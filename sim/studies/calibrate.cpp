@@ -1,4 +1,4 @@
-// Bond calibration: dense samples, platen tests, the table (sim/studies/calibrate.h).
+// Bond calibration: dense samples, tests through gripped ends, the table (sim/studies/calibrate.h).
 #include "sim/studies/calibrate.h"
 
 #include <algorithm>
@@ -31,7 +31,7 @@ constexpr double kSettledFraction = 0.6;
 // Spheres put in the box: this fraction of its volume, a little more than settles in it, so that
 // the lid bears on them [-].
 constexpr double kFillFraction = 0.62;
-// The disk's two flats, where the platens bear, each subtend this angle at the centre (2 alpha;
+// The disk's two flats, where it is gripped, each subtend this angle at the centre (2 alpha;
 // ISRM's curved jaws touch the disk over ~10 deg, a flattened disc over 20-30 deg; at D ~ 8-16
 // sphere diameters a flat of 30 deg is 2-4 spheres wide) [rad].
 constexpr double kFlatAngle = 30 * kPi / 180;
@@ -39,7 +39,7 @@ constexpr double kFlatAngle = 30 * kPi / 180;
 constexpr int kRelaxSteps = 500;
 // A sphere of a sample with fewer bonds than this is removed before the test [-].
 constexpr int kMinBonds = 3;
-// Wave transits of the sample's height over which the platens close by the reference strain
+// Wave transits of the sample's height over which the grips close by the reference strain
 // (calibrate.h: the quasi-static speed).
 constexpr double kTransits = 100;
 // The settling: gravity four times Earth's (the spheres' weight still overlaps them by under
@@ -59,7 +59,7 @@ double CpuNow() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 // strength); then the spheres are cut to the shape.
 
 // A square of half side `half` in its body frame's z = 0 plane, its triangles counter-clockwise
-// seen from +z (`up`) or -z: a platen, or the lid.
+// seen from +z (`up`) or -z: the lid.
 dem::TriangleMesh Square(const std::string& name, double half, bool up, int material) {
   dem::TriangleMesh mesh;
   mesh.name = name;
@@ -267,24 +267,10 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
   const size_t n = sample.x.size();
   if (n == 0) throw std::runtime_error("calibrate bonds: an empty sample");
 
-  // Particles (0) and platens (1): the platens have the particles' elastic constants.
+  // The particles; the ends are gripped (below), so there is no platen to touch.
   dem::MaterialTable table;
   const int m = table.Add(sample.material);
-  dem::Material platen_material = sample.material;
-  platen_material.name = "platen";
-  platen_material.shear_modulus *= spec.platen_softness;
-  const int mp = table.Add(platen_material);
   table.SetInteraction(m, m, spec.interaction);
-  // The prism's platens are frictionless (the end condition of Potyondy & Cundall's tests: no
-  // confinement at the ends); the disk's have the particles' own friction, as steel jaws hold a
-  // disk (frictionless, the disk rolls between them on its two contact spheres).
-  dem::Interaction ends = spec.interaction;
-  if (sample.shape == BondSampleShape::kPrism) {
-    ends.friction = 0;
-    ends.rolling_friction = 0;
-  }
-  table.SetInteraction(m, mp, ends);
-  table.SetInteraction(mp, mp, ends);
 
   dem::Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
   double r_min = 1e300, r_sum = 0;
@@ -332,7 +318,7 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
   system.set_time(0);
 
   // Bonds between the spheres closer than the gap, as a bed's are made. A sphere with fewer than
-  // kMinBonds bonds is not held in the sample (a loose sphere at a platen slides out sideways
+  // kMinBonds bonds is not held in the sample (a loose sphere at an end slides out sideways
   // and carries nothing): it is removed, and so on until every sphere has kMinBonds (Potyondy &
   // Cundall 2004, section 2.3, step 4, remove their "floaters" the same way).
   std::vector<size_t> index_of(n);
@@ -368,20 +354,23 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
   out.particles = static_cast<int64_t>(system.particles().size());
   out.bonds = static_cast<int64_t>(bonds.size());
 
-  // The platens: squares three sample widths across.
-  const double half = 1.5 * std::max(hi.x - lo.x, hi.y - lo.y);
-  const double cx = 0.5 * (lo.x + hi.x), cy = 0.5 * (lo.y + hi.y);
-  const int bottom = system.AddMesh(Square("bottom platen", half, true, mp));
-  const int top = system.AddMesh(Square("top platen", half, false, mp));
-  // They start at the lowest and highest points of the spheres kept.
+  // The grips: the spheres whose centres lie within one mean diameter of the sample's lowest and
+  // highest points (calibrate.h).
   double z_lo = 1e300, z_hi = -1e300;
   for (size_t i = 0; i < system.particles().size(); ++i) {
     z_lo = std::min(z_lo, system.particles().x[i].z - system.particles().radius[i]);
     z_hi = std::max(z_hi, system.particles().x[i].z + system.particles().radius[i]);
   }
   const double h0 = z_hi - z_lo;
+  std::vector<int64_t> bottom_grip, top_grip;
+  for (size_t i = 0; i < system.particles().size(); ++i) {
+    const double z = system.particles().x[i].z;
+    if (z - z_lo <= 2 * r_mean) bottom_grip.push_back(system.particles().id[i]);
+    if (z_hi - z <= 2 * r_mean) top_grip.push_back(system.particles().id[i]);
+  }
+  out.gripped = static_cast<int64_t>(bottom_grip.size() + top_grip.size());
 
-  // The quasi-static speed (calibrate.h): the platens close by eps_ref in kTransits transits.
+  // The quasi-static speed (calibrate.h): the grips close by eps_ref in kTransits transits.
   const double wave_speed = std::sqrt(spec.bond.modulus / sample.material.density);
   const double bond_strain = spec.bond.tensile_strength * spec.strength_scale / spec.bond.modulus;
   const double eps_ref =
@@ -395,11 +384,10 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
   const double area = sample.shape == BondSampleShape::kPrism
                           ? sample.width * sample.width
                           : 0.5 * kPi * sample.diameter * sample.thickness;  // sigma_t = P / it
-  std::vector<double> strain, stress;  // block means: platen strain, stress [-], [Pa]
+  std::vector<double> strain, stress;  // block means: grip strain, stress [-], [Pa]
   // The gauge (compression): the spheres whose centres start in the bands 20-30% and 70-80% of
   // the height; the strain between the bands' mean heights, as a lab's gauges on the sample's
-  // middle measure it, without the platens' few Hertz contacts in series (on a rough end they
-  // are most of the compliance at first).
+  // middle measure it, without the ends' seating in series.
   std::vector<int64_t> low_band, high_band;
   double low0 = 0, high0 = 0;
   for (size_t i = 0; i < system.particles().size(); ++i) {
@@ -424,15 +412,36 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
   int64_t in_block = 0, broken = 0, tension = 0, peak_block = -1;
   double peak = 0;
   const int64_t max_steps = static_cast<int64_t>(std::ceil(spec.max_strain * h0 / (v * dt))) + 1;
+  const double sense = spec.pull ? -1.0 : 1.0;  // the grips close (+1) or part (-1)
+  // Each step the grips' vertical velocity is set so that velocity Verlet's first half kick
+  // (v += f dt / 2m, the force of the last step) brings it to +-v/2 before the drift: the grips
+  // move as the platens would, and whatever they are pushed or pulled with is the load.
+  dem::Particles& moved = system.mutable_particles();
+  auto grip_force = [&](const std::vector<int64_t>& grip) {
+    for (size_t i = 0; i < moved.size(); ++i) at[static_cast<size_t>(moved.id[i])] = i;
+    double sum = 0;
+    for (const int64_t id : grip) sum += moved.f[at[static_cast<size_t>(id)]].z;
+    return sum;
+  };
+  // The prism's grips are free sideways (frictionless platens); the disk's are held sideways too,
+  // as jaws with friction hold it: free, the narrow flats let the two halves slide past each
+  // other, and the load fell with no bond broken.
+  const bool held_sideways = sample.shape == BondSampleShape::kDisk;
+  auto drive = [&](const std::vector<int64_t>& grip, double speed) {
+    for (const int64_t id : grip) {
+      const size_t i = at[static_cast<size_t>(id)];
+      const double kick = 0.5 * dt * moved.inv_mass[i];
+      moved.v[i].z = speed - kick * moved.f[i].z;
+      if (held_sideways) {
+        moved.v[i].x = -kick * moved.f[i].x;
+        moved.v[i].y = -kick * moved.f[i].y;
+      }
+    }
+  };
   for (int64_t step = 0; step < max_steps; ++step) {
-    const double t_next = system.time() + dt;
-    dem::MeshMotion motion;
-    motion.pose.position = {cx, cy, z_lo + 0.5 * v * t_next};
-    motion.velocity = {0, 0, 0.5 * v};
-    system.SetMeshMotion(bottom, motion);
-    motion.pose.position = {cx, cy, z_hi - 0.5 * v * t_next};
-    motion.velocity = {0, 0, -0.5 * v};
-    system.SetMeshMotion(top, motion);
+    for (size_t i = 0; i < moved.size(); ++i) at[static_cast<size_t>(moved.id[i])] = i;
+    drive(bottom_grip, 0.5 * sense * v);
+    drive(top_grip, -0.5 * sense * v);
     const dem::StepStatus status = system.Step();
     if ((status.flags & ~static_cast<uint32_t>(dem::kExcessiveOverlap)) != 0)
       throw std::runtime_error("calibrate bonds: the test went unstable: " + status.message);
@@ -442,7 +451,9 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
       ++broken;
       if (b.mode == dem::BondBreakMode::kTension) ++tension;
     }
-    load_sum += 0.5 * (system.mesh_wrench(top).force.z - system.mesh_wrench(bottom).force.z);
+    // The sample pushes the top grip up (+z) and the bottom one down in compression; the bonds
+    // and contacts within a grip cancel in its sum.
+    load_sum += 0.5 * sense * (grip_force(top_grip) - grip_force(bottom_grip));
     if (++in_block < block && step + 1 < max_steps) continue;
     const double load = load_sum / in_block;
     load_sum = 0;
@@ -451,14 +462,14 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
     stress.push_back(load / area);
     if (gauge) {
       const double low = band_height(low_band), high = band_height(high_band);
-      gauge_strain.push_back(1 - (high - low) / (high0 - low0));
+      gauge_strain.push_back(sense * (1 - (high - low) / (high0 - low0)));
     }
     if (load > peak) {
       peak = load;
       peak_block = static_cast<int64_t>(stress.size()) - 1;
       out.broken_at_peak = broken;
     }
-    // Failed: below stop_fraction of the peak with bonds broken, the platens half as far again
+    // Failed: below stop_fraction of the peak with bonds broken, the grips half as far again
     // as at the peak (a small sample's end sphere that lets go drops the load for a moment).
     if (broken > 0 && load < spec.stop_fraction * peak &&
         strain.back() >= 1.5 * strain[static_cast<size_t>(peak_block)])
@@ -493,7 +504,7 @@ namespace {
 
 struct Row {
   double scale = 1;
-  PlatenTestResult ucs, bt;
+  PlatenTestResult ucs, bt, direct;  // compression, Brazilian, direct tension
 };
 
 std::string Num(double v) {
@@ -511,16 +522,17 @@ std::string StopName(const PlatenTestResult& r) { return r.reached_limit ? "limi
 
 std::string RowLine(const Row& row) {
   char text[512];
-  const double ratio = row.bt.strength > 0 ? row.ucs.strength / row.bt.strength : 0;
-  std::snprintf(text, sizeof text,
-                "scale %-6g UCS %.4g MPa (%s), sigma_t %.4g MPa (%s), UCS/sigma_t %.3g, "
-                "E %.4g MPa, broken at peak %lld/%lld and %lld/%lld, %.1f CPU s",
-                row.scale, row.ucs.strength / 1e6, StopName(row.ucs).c_str(), row.bt.strength / 1e6,
-                StopName(row.bt).c_str(), ratio, row.ucs.young_modulus / 1e6,
-                static_cast<long long>(row.ucs.broken_at_peak),
-                static_cast<long long>(row.ucs.bonds),
-                static_cast<long long>(row.bt.broken_at_peak), static_cast<long long>(row.bt.bonds),
-                row.ucs.cpu_s + row.bt.cpu_s);
+  const double ratio = row.direct.strength > 0 ? row.ucs.strength / row.direct.strength : 0;
+  std::snprintf(
+      text, sizeof text,
+      "scale %-6g UCS %.4g MPa (%s), sigma_t %.4g MPa direct (%s), %.4g MPa Brazilian "
+      "(%s), UCS/sigma_t %.3g, E %.4g MPa, broken at peak %lld/%lld and %lld/%lld, "
+      "%.1f CPU s",
+      row.scale, row.ucs.strength / 1e6, StopName(row.ucs).c_str(), row.direct.strength / 1e6,
+      StopName(row.direct).c_str(), row.bt.strength / 1e6, StopName(row.bt).c_str(), ratio,
+      row.ucs.young_modulus / 1e6, static_cast<long long>(row.ucs.broken_at_peak),
+      static_cast<long long>(row.ucs.bonds), static_cast<long long>(row.bt.broken_at_peak),
+      static_cast<long long>(row.bt.bonds), row.ucs.cpu_s + row.bt.cpu_s + row.direct.cpu_s);
   return text;
 }
 
@@ -530,22 +542,23 @@ void WriteCsv(const std::string& path, const std::vector<std::string>& header,
   if (!f) throw std::runtime_error(path + ": cannot write");
   for (const std::string& line : header) f << "# " << line << "\n";
   f << "scale,tensile_strength_pa,cohesion_pa,friction_angle_deg,modulus_pa,radius_multiplier,"
-       "stiffness_ratio,ucs_pa,sigma_t_pa,ucs_over_sigma_t,e_sample_pa,strain_at_peak,"
+       "stiffness_ratio,ucs_pa,sigma_t_direct_pa,sigma_t_brazilian_pa,ucs_over_sigma_t_direct,"
+       "e_sample_pa,strain_at_peak,"
        "broken_at_peak_ucs,broken_at_peak_bt,broken_tension_ucs,broken_ucs,bonds_ucs,bonds_bt,"
        "particles_ucs,particles_bt,steps_ucs,steps_bt,stop_ucs,stop_bt,max_overlap,time_step_s,"
        "cpu_s\n";
   for (const Row& r : rows) {
-    const double ratio = r.bt.strength > 0 ? r.ucs.strength / r.bt.strength : 0;
+    const double ratio = r.direct.strength > 0 ? r.ucs.strength / r.direct.strength : 0;
     f << Num(r.scale) << "," << Num(bond.tensile_strength * r.scale) << ","
       << Num(bond.cohesion * r.scale) << "," << Num(bond.friction_angle / kDeg) << ","
       << Num(bond.modulus) << "," << Num(bond.radius_multiplier) << "," << Num(bond.stiffness_ratio)
-      << "," << Num(r.ucs.strength) << "," << Num(r.bt.strength) << "," << Num(ratio) << ","
-      << Num(r.ucs.young_modulus) << "," << Num(r.ucs.strain_at_peak) << "," << r.ucs.broken_at_peak
-      << "," << r.bt.broken_at_peak << "," << r.ucs.broken_tension << "," << r.ucs.broken << ","
-      << r.ucs.bonds << "," << r.bt.bonds << "," << r.ucs.particles << "," << r.bt.particles << ","
-      << r.ucs.steps << "," << r.bt.steps << "," << StopName(r.ucs) << "," << StopName(r.bt) << ","
-      << Num(std::max(r.ucs.max_overlap, r.bt.max_overlap)) << "," << Num(r.ucs.time_step) << ","
-      << Num(r.ucs.cpu_s + r.bt.cpu_s) << "\n";
+      << "," << Num(r.ucs.strength) << "," << Num(r.direct.strength) << "," << Num(r.bt.strength)
+      << "," << Num(ratio) << "," << Num(r.ucs.young_modulus) << "," << Num(r.ucs.strain_at_peak)
+      << "," << r.ucs.broken_at_peak << "," << r.bt.broken_at_peak << "," << r.ucs.broken_tension
+      << "," << r.ucs.broken << "," << r.ucs.bonds << "," << r.bt.bonds << "," << r.ucs.particles
+      << "," << r.bt.particles << "," << r.ucs.steps << "," << r.bt.steps << "," << StopName(r.ucs)
+      << "," << StopName(r.bt) << "," << Num(std::max(r.ucs.max_overlap, r.bt.max_overlap)) << ","
+      << Num(r.ucs.time_step) << "," << Num(r.ucs.cpu_s + r.bt.cpu_s + r.direct.cpu_s) << "\n";
   }
 }
 
@@ -569,8 +582,7 @@ std::string BondCalibrationCommandLine(const BondCalibrationOptions& o) {
     << " --friction-angle " << Num(o.bond.friction_angle / kDeg) << " --damping-ratio "
     << Num(o.bond.damping_ratio) << " --gap-fraction " << Num(o.gap_fraction) << " --scales "
     << list(o.scales) << " --rayleigh-fraction " << Num(o.test.rayleigh_fraction)
-    << " --speed-factor " << Num(o.test.speed_factor) << " --platen-softness "
-    << Num(o.test.platen_softness) << " --max-strain " << Num(o.test.max_strain)
+    << " --speed-factor " << Num(o.test.speed_factor) << " --max-strain " << Num(o.test.max_strain)
     << " --stop-fraction " << Num(o.test.stop_fraction);
   if (o.rate_check) s << " --rate-check";
   s << " -o " << o.output;
@@ -634,8 +646,6 @@ int RunBondCalibration(const BondCalibrationOptions& given) {
         o.test.max_strain);
   Check(o.test.stop_fraction > 0 && o.test.stop_fraction < 1, "--stop-fraction",
         "a number in (0, 1)", o.test.stop_fraction);
-  Check(o.test.platen_softness >= 1e-4 && o.test.platen_softness <= 1e4, "--platen-softness",
-        "a number in [1e-4, 1e4]", o.test.platen_softness);
   CheckWritable(o.output);
 
   // The samples, made once.
@@ -669,12 +679,13 @@ int RunBondCalibration(const BondCalibrationOptions& given) {
   header.push_back("bonds between spheres closer than gap " + Num(gap) +
                    " m; strengths = scale x (tensile_strength, cohesion)");
   header.push_back(
-      "UCS = peak platen force / W^2; sigma_t = 2 P / (pi D t) (ISRM 1978, on a disk with two "
-      "30 deg flats); E_sample = least-squares slope of stress against the gauge strain (the "
-      "sample's middle half) over 10-50% of UCS before the peak; strain_at_peak: the platens'");
+      "loaded through gripped ends (the spheres within one diameter of each end driven at +-v/2); "
+      "UCS = peak load / W^2; sigma_t = 2 P / (pi D t) (ISRM 1978, on a disk gripped at two 30 "
+      "deg flats); E_sample = least-squares slope of stress against the gauge strain (the "
+      "sample's middle half) over 10-50% of UCS before the peak; strain_at_peak: the grips'");
   header.push_back(
       "platen speed v = speed_factor x min(sigma_c / E_b, max_strain) x "
-      "sqrt(E_b / rho) / 100; stop: load < stop_fraction x peak after a break, the platens "
+      "sqrt(E_b / rho) / 100; stop: load < stop_fraction x peak after a break, the grips "
       "1.5x as far as at the peak (failed), or max_strain (limit)");
   if (!o.quiet)
     std::fprintf(stderr, "scoopsim: %s\nscoopsim: %s\n", header[1].c_str(), header[2].c_str());
@@ -685,6 +696,9 @@ int RunBondCalibration(const BondCalibrationOptions& given) {
     Row row;
     row.scale = scale;
     row.ucs = RunPlatenTest(prism, test);
+    PlatenTestSpec pull = test;
+    pull.pull = true;
+    row.direct = RunPlatenTest(prism, pull);
     row.bt = RunPlatenTest(disk, test);
     rows.push_back(row);
     std::printf("%s\n", RowLine(row).c_str());
@@ -696,16 +710,19 @@ int RunBondCalibration(const BondCalibrationOptions& given) {
     slow.strength_scale = o.scales.front();
     slow.speed_factor = 0.5 * test.speed_factor;
     const PlatenTestResult ucs = RunPlatenTest(prism, slow);
+    slow.pull = true;
+    const PlatenTestResult direct = RunPlatenTest(prism, slow);
+    slow.pull = false;
     const PlatenTestResult bt = RunPlatenTest(disk, slow);
     const Row& first = rows.front();
-    std::snprintf(
-        text, sizeof text,
-        "rate check, scale %g at half the speed: UCS %.4g MPa (%+.1f%%), sigma_t %.4g "
-        "MPa (%+.1f%%), E %.4g MPa (%+.1f%%)",
-        first.scale, ucs.strength / 1e6, 100 * (ucs.strength / first.ucs.strength - 1),
-        bt.strength / 1e6, 100 * (bt.strength / first.bt.strength - 1), ucs.young_modulus / 1e6,
-        first.ucs.young_modulus > 0 ? 100 * (ucs.young_modulus / first.ucs.young_modulus - 1)
-                                    : 0.0);
+    const auto change = [](double now, double was) { return was > 0 ? 100 * (now / was - 1) : 0; };
+    std::snprintf(text, sizeof text,
+                  "rate check, scale %g at half the speed: UCS %.4g MPa (%+.1f%%), sigma_t %.4g "
+                  "MPa direct (%+.1f%%), %.4g MPa Brazilian (%+.1f%%), E %.4g MPa (%+.1f%%)",
+                  first.scale, ucs.strength / 1e6, change(ucs.strength, first.ucs.strength),
+                  direct.strength / 1e6, change(direct.strength, first.direct.strength),
+                  bt.strength / 1e6, change(bt.strength, first.bt.strength),
+                  ucs.young_modulus / 1e6, change(ucs.young_modulus, first.ucs.young_modulus));
     header.push_back(text);
     std::printf("%s\n", text);
     WriteCsv(o.output, header, bond, rows);
