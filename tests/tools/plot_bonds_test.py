@@ -1,0 +1,214 @@
+#!/usr/bin/python3
+"""tools/plot_bonds.py on synthetic run files written as sim/loop/world.cpp writes a dig's (the
+/scoop/ rows, /bonds/ rows with them, one /bonds/broken/ record per break, dtypes and shapes of
+docs/outputs.md): a step of DT = 1 ms, a row at the end of a pass's first step and then every
+5 steps (World::Record's next_row), pass 1 = steps 1..98 (rows at steps 1, 5, 10, ..., 95), pass 2
+= steps 99..196 (rows at 99, 103, 108, ..., 193), 20 rows each; a break's time is the end of its
+step. Per pass, |F| = 0 before the contact row c (3 in pass 1, 4 in pass 2), then F = s (3, 0, -4)
+N up to row 9 and s (0, 12, 5) N from row 10 (s = 1 in pass 1, 100 in pass 2); rho_path = 2 mm x
+(row - c) from contact. 1000 bonds made; breaks (step, mode): pass 1 (1, 1) (40, 2) (41, 2)
+(97, 1: after the pass's last row) (98, 2: the pass's last step, exactly at the boundary); pass 2
+(99, 1: its first step) (150, 1) (196, 2: after its last row).
+Closed forms checked, from the CSV:
+  mean |F| after first contact: (7 x 5 + 10 x 13) / 17 = 165/17 N; 100 (6 x 5 + 10 x 13) / 16 N;
+  peak |F|: 13 N; 1300 N; mean Fz: (7 x -4 + 10 x 5) / 17 = 22/17 N; 100 (6 x -4 + 50) / 16 N;
+  broken tension/shear: 2/3 in pass 1 (97 and 98 are pass 1's, 99 pass 2's), 2/1 in pass 2;
+  intact at the pass's end: 1000 - 5 = 995; 1000 - 8 = 992 (the breaks after the last row count);
+  collected_kg 0.01 and 0.02 (/scoop/collected_mass, one row per ended pass).
+A run cut short in pass 2 (rows up to its 13th, step 158, breaks up to step 158, one
+collected_mass row; /scoop/pass one row ahead of the others, as a file killed between two series'
+flushes): pass 2 has tension 2, shear 0, intact 1000 - 7 = 993 (as far as the file goes), no
+collected_kg; pass 1 as above. An unbonded run (no /bonds/, |F| 0.5 N):
+no breaks, intact empty. A run that has written no row yet (empty series): no CSV row, exit 0.
+Tolerance: relative 1e-12 (the CSV keeps Python's repr of each float).
+The figure (plot_bonds.draw, smoothing off): each break drawn at the rho of the row at or after
+it, the pass's last row for one after it: pass 1 at 0, 10, 12, 32, 32 mm (steps 1, 40 -> row 40,
+41 -> row 45, 97 and 98 -> row 95), pass 2 at 0, 14, 30 mm (steps 99, 150 -> row 153, 196 -> row
+193), to 1e-9 mm; |F| drawn from 0 to 1300 N, exactly.
+Defect this pins: the tool took a pass's breaks from one row spacing before its first row to its
+last row, so the breaks of a pass's last steps (97, 98) went to the next pass, those after the
+last pass's last row (196) to none, and the intact count at a pass's end was that of its last row
+(997, not 995); a file whose series differ in length (the cut one) raised IndexError, and so did
+--csv of a run with no row yet.
+Also: the PNG is written and non-empty; bad input (a
+missing file, a file without /scoop/time, an even or non-integer --smooth, a wrong --labels count,
+no -o, an output that cannot be written) gives exit 2 and exactly one line on stderr."""
+
+import csv
+import importlib.util
+import os
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+from cli_check import expect_refused, test_dir
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+SCRIPT = os.path.join(ROOT, "tools", "plot_bonds.py")
+DT = 1e-3          # step [s]
+INTERVAL = 5       # steps between rows (dig.interval / DT)
+PASS_STEPS = 98    # steps per pass
+MADE = 1000        # bonds made
+CONTACT = {1: 3, 2: 4}
+SCALE = {1: 1.0, 2: 100.0}
+BREAKS = [(1, 1), (40, 2), (41, 2), (97, 1), (98, 2), (99, 1), (150, 1), (196, 2)]
+F_A, F_B = np.array([3.0, 0.0, -4.0]), np.array([0.0, 12.0, 5.0])  # |F| 5 and 13 N
+
+
+def row_steps(first_step):
+    """The steps that end with a row in a pass whose first step is first_step (World::Record:
+    next_row starts at the pass's start and goes up by the interval at each row)."""
+    steps, next_row = [], first_step - 1
+    for s in range(first_step, first_step + PASS_STEPS):
+        if s >= next_row:
+            steps.append(s)
+            next_row += INTERVAL
+    return steps
+
+
+def write_run(path, cut_step=None, bonded=True):
+    """A two-pass bonded dig (or, cut_step given, one whose file ends at that step)."""
+    scoop = {k: [] for k in ("time", "pass", "rho", "rho_path", "force_scoop", "contacts")}
+    bond_time, intact = [], []
+    for p in (1, 2):
+        for j, s in enumerate(row_steps(1 + (p - 1) * PASS_STEPS)):
+            if cut_step is not None and s > cut_step:
+                break
+            c = CONTACT[p]
+            force = 0 * F_A if j < c else SCALE[p] * (F_A if j < 10 else F_B)
+            scoop["time"].append(s * DT)
+            scoop["pass"].append(float(p))
+            scoop["rho"].append(0.0015 * max(0, j - c))
+            scoop["rho_path"].append(0.002 * max(0, j - c))
+            scoop["force_scoop"].append(force)
+            scoop["contacts"].append(0.0 if j < c else 3.0)
+            bond_time.append(s * DT)
+            intact.append(float(MADE - sum(1 for b, _ in BREAKS if b <= s)))
+    breaks = [(b, m) for b, m in BREAKS if cut_step is None or b <= cut_step]
+    ended = 2 if cut_step is None else sum(1 for p in (1, 2) if p * PASS_STEPS <= cut_step)
+    with h5py.File(path, "w") as f:
+        for k, v in scoop.items():
+            f["scoop/" + k] = np.array(v, dtype=float)
+        f["scoop/collected_mass"] = 0.01 * np.arange(1, ended + 1, dtype=float)
+        if cut_step is not None:  # /scoop/pass flushed one row further than the others
+            del f["scoop/pass"]
+            f["scoop/pass"] = np.array(scoop["pass"] + [2.0])
+        if not bonded:
+            return
+        f["bonds/time"] = np.array(bond_time, dtype=float)
+        f["bonds/intact"] = np.array(intact, dtype=float)
+        m = len(breaks)
+        f["bonds/broken/time"] = np.array([b * DT for b, _ in breaks], dtype=float)
+        f["bonds/broken/pair"] = np.arange(2 * m, dtype=np.uint64).reshape(m, 2)
+        f["bonds/broken/position"] = np.zeros((m, 3))
+        f["bonds/broken/mode"] = np.array([md for _, md in breaks], dtype=np.uint64)
+        f["bonds/broken/stress"] = np.full(m, 1e6)
+
+
+def write_unbonded(path):
+    n = 30
+    with h5py.File(path, "w") as f:
+        f["scoop/time"] = DT * np.arange(1, n + 1, dtype=float)
+        f["scoop/pass"] = np.ones(n)
+        f["scoop/rho_path"] = 0.001 * np.arange(n, dtype=float)
+        f["scoop/force_scoop"] = np.tile([0.3, 0.0, 0.4], (n, 1))  # |F| 0.5 N
+        f["scoop/collected_mass"] = np.array([0.005])
+
+
+def run(args):
+    return subprocess.run([sys.executable, SCRIPT] + args, capture_output=True, text=True)
+
+
+def close(got, want):
+    return abs(float(got) - want) <= 1e-12 * max(abs(want), 1e-300)
+
+
+def check_pass(r, want):
+    """r: a CSV row; want: column -> value (floats compared at 1e-12, the rest as text)."""
+    for k, v in want.items():
+        if isinstance(v, float):
+            assert close(r[k], v), (k, v, r)
+        else:
+            assert r[k] == str(v), (k, v, r)
+
+
+def main():
+    with test_dir("plot_bonds") as tmp:
+        full, cut, loose = (os.path.join(tmp, n + ".h5") for n in ("full", "cut", "loose"))
+        write_run(full)
+        write_run(cut, cut_step=158)
+        write_unbonded(loose)
+        png, png_log, table = (os.path.join(tmp, n) for n in ("f.png", "f_log.png", "s.csv"))
+        r = run([full, cut, loose, "-o", png, "--csv", table, "--smooth", "3"])
+        assert r.returncode == 0, r.stderr
+        with open(table) as f:
+            got = {(row["run"], row["pass"]): row for row in csv.DictReader(f)}
+        assert sorted(got) == [("cut", "1"), ("cut", "2"), ("full", "1"), ("full", "2"),
+                               ("loose", "1")], sorted(got)
+        pass1 = {"mean_F_N": 165 / 17, "peak_F_N": 13.0, "mean_Fz_scoop_N": 22 / 17,
+                 "broken_tension": 2, "broken_shear": 3, "intact_at_end": 995,
+                 "collected_kg": 0.01}
+        check_pass(got[("full", "1")], pass1)
+        check_pass(got[("full", "2")], {
+            "mean_F_N": 100 * 160 / 16, "peak_F_N": 1300.0, "mean_Fz_scoop_N": 100 * 26 / 16,
+            "broken_tension": 2, "broken_shear": 1, "intact_at_end": 992, "collected_kg": 0.02})
+        check_pass(got[("cut", "1")], pass1)
+        check_pass(got[("cut", "2")], {
+            "broken_tension": 2, "broken_shear": 0, "intact_at_end": 993, "collected_kg": ""})
+        check_pass(got[("loose", "1")], {
+            "mean_F_N": 0.5, "peak_F_N": 0.5, "mean_Fz_scoop_N": 0.4, "broken_tension": 0,
+            "broken_shear": 0, "intact_at_end": "", "collected_kg": 0.005})
+
+        # A run with no row yet: a CSV of the header alone.
+        empty = os.path.join(tmp, "empty.h5")
+        with h5py.File(empty, "w") as f:
+            for k in ("time", "pass", "rho_path"):
+                f["scoop/" + k] = np.zeros(0)
+            f["scoop/force_scoop"] = np.zeros((0, 3))
+        r = run([empty, "-o", png, "--csv", table])
+        assert r.returncode == 0, r.stderr
+        with open(table) as f:
+            assert len(f.read().strip().splitlines()) == 1
+
+        # The PNG: written, non-empty.
+        with open(png, "rb") as f:
+            data = f.read()
+        assert data.startswith(b"\x89PNG") and len(data) > 1000, len(data)
+
+        # The figure's lines: the breaks' rho and |F|.
+        spec = importlib.util.spec_from_file_location("plot_bonds", SCRIPT)
+        tool = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(tool)
+        runs = [tool.read_run(full)]
+        fig = tool.draw(runs, ["full"], 1)
+        ax_f, ax_b = fig.axes
+        values = np.concatenate([line.get_ydata() for line in ax_f.get_lines()])
+        assert values.min() == 0.0 and values.max() == 1300.0, (values.min(), values.max())
+        drawn = [list(line.get_xdata()) for line in ax_b.get_lines()]
+        for got_x, want_x in zip(drawn, ([0, 10, 12, 32, 32], [0, 14, 30])):
+            assert len(got_x) == len(want_x) and all(
+                abs(g - w) <= 1e-9 for g, w in zip(got_x, want_x)), (drawn, want_x)
+        assert len(drawn) == 2, drawn
+
+        # Bad input: exit 2, one line naming what is wrong.
+        no_time = os.path.join(tmp, "no_time.h5")
+        with h5py.File(no_time, "w") as f:
+            f["scoop/pass"] = np.ones(3)
+        missing = os.path.join(tmp, "missing.h5")
+        expect_refused(run, [
+            ([missing, "-o", png], missing),
+            ([no_time, "-o", png], "/scoop/time"),
+            ([empty, "-o", png, "--csv", os.path.join(tmp, "no", "s.csv")], "--csv"),
+            ([empty, "-o", os.path.join(tmp, "no", "f.png")], "-o"),
+            ([full, "-o", png, "--smooth", "4"], "--smooth"),
+            ([full, "-o", png, "--smooth", "abc"], "--smooth"),
+            ([full, loose, "-o", png, "--labels", "a"], "--labels"),
+            ([full], "-o"),
+        ])
+    print("plot_bonds_test: passed")
+
+
+if __name__ == "__main__":
+    main()
