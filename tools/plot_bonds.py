@@ -2,7 +2,7 @@
 """Digs in sintered ground side by side: the wrench along rho and the bonds broken, per pass.
 
     tools/plot_bonds.py RUN.h5 [RUN2.h5 ...] -o PLOT.png [--csv SUMMARY.csv] [--labels A,B,...]
-                        [--smooth W]
+                        [--smooth W] [--log]
 
 Reads scoopsim run files (SI units; docs/outputs.md):
   /scoop/time (n) [s], /scoop/pass (n), /scoop/rho_path (or /scoop/rho) (n) [m],
@@ -10,9 +10,10 @@ Reads scoopsim run files (SI units; docs/outputs.md):
   ended) [kg] (optional); /bonds/time (k) [s], /bonds/intact (k), /bonds/broken/time (b) [s] and
   /bonds/broken/mode (b: 1 tension, 2 shear); an unbonded run has no /bonds/ and counts zero.
 Draws, one colour per run and one line style per pass: |F| against rho (smoothed by a centred
-moving average over --smooth samples, odd), and the bonds broken so far in the pass against rho
-(each break placed at the rho of the scoop row at or after its time, the pass's last row for a
-break after it).
+moving average over --smooth samples, odd; --log: on a log axis, values below 1e-3 N drawn at
+1e-3 N, so that an unbonded run's ~0.5 N and a sintered one's ~600 N both read), and the bonds
+broken so far in the pass against rho (each break placed at the rho of the scoop row at or after
+its time, the pass's last row for a break after it).
 
 A break belongs to the pass whose steps it broke in (its time is the end of that step): pass p's
 steps end from its first row's time (a pass's first row is written at the end of its first step,
@@ -39,6 +40,7 @@ import sys
 import h5py
 import numpy as np
 
+LOG_FLOOR_N = 1e-3  # --log: |F| at or below this is drawn at it [N]
 FIELDS = ["run", "pass", "mean_F_N", "peak_F_N", "mean_Fz_scoop_N", "broken_tension",
           "broken_shear", "intact_at_end", "collected_kg"]
 
@@ -174,9 +176,9 @@ def summary(run, label):
     return rows_out
 
 
-def draw(runs, labels, window):
-    """The figure: |F| (moving average over `window` rows) and the bonds broken so far, against
-    rho, a line per run and pass."""
+def draw(runs, labels, window, log):
+    """The figure: |F| (moving average over `window` rows; log: on a log axis, floored at
+    LOG_FLOOR_N) and the bonds broken so far, against rho, a line per run and pass."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -189,19 +191,25 @@ def draw(runs, labels, window):
             rows = pass_rows(run, p)
             rho_mm = 1e3 * run["rho"][rows]
             mag = smooth(np.linalg.norm(run["force"][rows], axis=1), window)
+            if log:
+                mag = np.maximum(mag, LOG_FLOOR_N)
             style = styles[k % len(styles)]
             ax_f.plot(rho_mm, mag, color=color, linestyle=style, label="%s, pass %d" % (label, p))
             where, _ = breaks_in_pass(run, p)
             order = np.sort(where)
             ax_b.step(1e3 * order, np.arange(1, order.size + 1), where="post", color=color,
                       linestyle=style, label="%s, pass %d" % (label, p))
-    ax_f.set_ylabel("|F| on the scoop [N] (moving average)")
+    if log:
+        ax_f.set_yscale("log")
+        ax_f.set_ylabel("|F| on the scoop [N] (moving average; log, floor %g N)" % LOG_FLOOR_N)
+    else:
+        ax_f.set_ylabel("|F| on the scoop [N] (moving average)")
     ax_b.set_ylabel("bonds broken in the pass")
     ax_b.set_xlabel("rho: the scoop CoM's path since first contact [mm]")
     for ax in (ax_f, ax_b):
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=7, ncol=2)
-        ax.grid(alpha=0.3)
+        ax.grid(alpha=0.3, which="both" if ax is ax_f and log else "major")
     fig.tight_layout()
     return fig
 
@@ -213,6 +221,8 @@ def main(argv=None):
     ap.add_argument("--csv")
     ap.add_argument("--labels")
     ap.add_argument("--smooth", type=int, default=51)
+    ap.add_argument("--log", action="store_true",
+                    help="|F| on a log axis (values below %g N drawn at it)" % LOG_FLOOR_N)
     args = ap.parse_args(argv)
     try:
         labels = args.labels.split(",") if args.labels else [
@@ -227,7 +237,7 @@ def main(argv=None):
         print("plot_bonds: %s" % e, file=sys.stderr)
         return 2
 
-    fig = draw(runs, labels, args.smooth)
+    fig = draw(runs, labels, args.smooth, args.log)
     option = "-o"
     try:
         fig.savefig(args.output, dpi=110)

@@ -24,13 +24,14 @@ Tolerance: relative 1e-12 (the CSV keeps Python's repr of each float).
 The figure (plot_bonds.draw, smoothing off): each break drawn at the rho of the row at or after
 it, the pass's last row for one after it: pass 1 at 0, 10, 12, 32, 32 mm (steps 1, 40 -> row 40,
 41 -> row 45, 97 and 98 -> row 95), pass 2 at 0, 14, 30 mm (steps 99, 150 -> row 153, 196 -> row
-193), to 1e-9 mm; |F| drawn from 0 to 1300 N, exactly.
+193), to 1e-9 mm; |F| drawn from 0 to 1300 N on a linear axis, and with --log on a log axis from
+1e-3 N (the rows before contact, floored) to 1300 N, exactly.
 Defect this pins: the tool took a pass's breaks from one row spacing before its first row to its
 last row, so the breaks of a pass's last steps (97, 98) went to the next pass, those after the
 last pass's last row (196) to none, and the intact count at a pass's end was that of its last row
 (997, not 995); a file whose series differ in length (the cut one) raised IndexError, and so did
 --csv of a run with no row yet.
-Also: the PNG is written and non-empty; bad input (a
+Also: the PNG is written and non-empty, with and without --log (the two differ); bad input (a
 missing file, a file without /scoop/time, an even or non-integer --smooth, a wrong --labels count,
 no -o, an output that cannot be written) gives exit 2 and exactly one line on stderr."""
 
@@ -172,25 +173,37 @@ def main():
         with open(table) as f:
             assert len(f.read().strip().splitlines()) == 1
 
-        # The PNG: written, non-empty.
+        # The PNG, linear and log: written, non-empty, and not the same picture.
+        r = run([full, loose, "-o", png_log, "--log"])
+        assert r.returncode == 0, r.stderr
         with open(png, "rb") as f:
-            data = f.read()
-        assert data.startswith(b"\x89PNG") and len(data) > 1000, len(data)
+            linear = f.read()
+        with open(png_log, "rb") as f:
+            logged = f.read()
+        for data in (linear, logged):
+            assert data.startswith(b"\x89PNG") and len(data) > 1000, len(data)
+        r = run([full, loose, "-o", png])
+        assert r.returncode == 0, r.stderr
+        with open(png, "rb") as f:
+            assert f.read() != logged, "--log drew the same picture as the linear axis"
 
-        # The figure's lines: the breaks' rho and |F|.
+        # The figure's lines: the breaks' rho and the |F| axis, linear and log.
         spec = importlib.util.spec_from_file_location("plot_bonds", SCRIPT)
         tool = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(tool)
         runs = [tool.read_run(full)]
-        fig = tool.draw(runs, ["full"], 1)
-        ax_f, ax_b = fig.axes
-        values = np.concatenate([line.get_ydata() for line in ax_f.get_lines()])
-        assert values.min() == 0.0 and values.max() == 1300.0, (values.min(), values.max())
-        drawn = [list(line.get_xdata()) for line in ax_b.get_lines()]
-        for got_x, want_x in zip(drawn, ([0, 10, 12, 32, 32], [0, 14, 30])):
-            assert len(got_x) == len(want_x) and all(
-                abs(g - w) <= 1e-9 for g, w in zip(got_x, want_x)), (drawn, want_x)
-        assert len(drawn) == 2, drawn
+        for log, floor in ((False, 0.0), (True, 1e-3)):
+            fig = tool.draw(runs, ["full"], 1, log)
+            ax_f, ax_b = fig.axes
+            assert ax_f.get_yscale() == ("log" if log else "linear"), (log, ax_f.get_yscale())
+            values = np.concatenate([line.get_ydata() for line in ax_f.get_lines()])
+            assert values.min() == floor and values.max() == 1300.0, (log, values.min(),
+                                                                      values.max())
+            drawn = [list(line.get_xdata()) for line in ax_b.get_lines()]
+            for got_x, want_x in zip(drawn, ([0, 10, 12, 32, 32], [0, 14, 30])):
+                assert len(got_x) == len(want_x) and all(
+                    abs(g - w) <= 1e-9 for g, w in zip(got_x, want_x)), (drawn, want_x)
+            assert len(drawn) == 2, drawn
 
         # Bad input: exit 2, one line naming what is wrong.
         no_time = os.path.join(tmp, "no_time.h5")
