@@ -4,7 +4,7 @@
     tools/plot_bonds.py RUN.h5 [RUN2.h5 ...] -o PLOT.png [--csv SUMMARY.csv] [--labels A,B,...]
                         [--smooth W] [--log]
 
-Reads scoopsim run files (SI units; docs/outputs.md):
+Reads scoopsim run files (SI units; docs/outputs.md), also one a run is still writing:
   /scoop/time (n) [s], /scoop/pass (n), /scoop/rho_path (or /scoop/rho) (n) [m],
   /scoop/force_scoop (n x 3) [N] (l_scoop frame), /scoop/collected_mass (one row per pass that has
   ended) [kg] (optional); /bonds/time (k) [s], /bonds/intact (k), /bonds/broken/time (b) [s] and
@@ -24,8 +24,11 @@ first row is in no pass.
 --csv writes one row per run and pass: mean and peak |F| after first contact (the first row with
 |F| > 0), mean Fz (l_scoop) after it, the bonds broken in the pass in tension and in shear, the
 bonds intact at the pass's end (the intact count of the last /bonds/ row at or before the pass's
-last row, less the pass's breaks after that row; empty for an unbonded run), the mass collected.
-A pass cut short counts what the file holds so far.
+last row, less the pass's breaks after that row; empty for an unbonded run), the mass collected,
+rho_end_m: the rho of the pass's last row [m] (how far a pass that is cut short got), and
+complete: 1 if the pass has ended (the run writes a pass's /scoop/collected_mass row when its
+driver ends the pass, World::EndPass, flushed with the pass's last rows), else 0 (a run still
+writing, or stopped, in that pass). A pass cut short counts what the file holds so far.
 
 Exit status: 0 written; 2 bad input (a missing file or dataset, a bad option, an output that
 cannot be written), one line on stderr.
@@ -42,7 +45,7 @@ import numpy as np
 
 LOG_FLOOR_N = 1e-3  # --log: |F| at or below this is drawn at it [N]
 FIELDS = ["run", "pass", "mean_F_N", "peak_F_N", "mean_Fz_scoop_N", "broken_tension",
-          "broken_shear", "intact_at_end", "collected_kg"]
+          "broken_shear", "intact_at_end", "collected_kg", "rho_end_m", "complete"]
 
 
 class InputError(Exception):
@@ -67,6 +70,10 @@ def need(f, path, name):
 def open_run(path):
     if not os.path.isfile(path):
         raise InputError("%s: no such file (expected a scoopsim run file, .h5)" % path)
+    try:
+        return h5py.File(path, "r", swmr=True)  # readable while the run is still writing
+    except (OSError, ValueError):
+        pass
     try:
         return h5py.File(path, "r")
     except OSError as e:
@@ -172,7 +179,9 @@ def summary(run, label):
             "mean_Fz_scoop_N": float(force[after:, 2].mean()) if after < mag.size else 0.0,
             "broken_tension": int((modes == 1).sum()), "broken_shear": int((modes == 2).sum()),
             "intact_at_end": intact_at_end(run, p),
-            "collected_kg": float(collected[k]) if k < collected.size else ""})
+            "collected_kg": float(collected[k]) if k < collected.size else "",
+            "rho_end_m": float(run["rho"][rows][-1]),
+            "complete": 1 if k < collected.size else 0})
     return rows_out
 
 

@@ -14,13 +14,16 @@ Closed forms checked, from the CSV:
   peak |F|: 13 N; 1300 N; mean Fz: (7 x -4 + 10 x 5) / 17 = 22/17 N; 100 (6 x -4 + 50) / 16 N;
   broken tension/shear: 2/3 in pass 1 (97 and 98 are pass 1's, 99 pass 2's), 2/1 in pass 2;
   intact at the pass's end: 1000 - 5 = 995; 1000 - 8 = 992 (the breaks after the last row count);
+  rho_end_m: 2 mm x (19 - 3) = 0.032 m; 2 mm x (19 - 4) = 0.030 m; complete 1 and 1;
   collected_kg 0.01 and 0.02 (/scoop/collected_mass, one row per ended pass).
 A run cut short in pass 2 (rows up to its 13th, step 158, breaks up to step 158, one
 collected_mass row; /scoop/pass one row ahead of the others, as a file killed between two series'
-flushes): pass 2 has tension 2, shear 0, intact 1000 - 7 = 993 (as far as the file goes), no
-collected_kg; pass 1 as above. An unbonded run (no /bonds/, |F| 0.5 N):
-no breaks, intact empty. A run that has written no row yet (empty series): no CSV row, exit 0.
-Tolerance: relative 1e-12 (the CSV keeps Python's repr of each float).
+flushes): pass 2 has rho_end_m 2 mm x (12 - 4) = 0.016 m, complete 0, tension 2, shear 0, intact
+1000 - 7 = 993 (as far as the file goes); pass 1 as above. The same file read while a process
+still holds it open for writing in SWMR mode (as a run writes its file): the same two rows. An
+unbonded run (no /bonds/, |F| 0.5 N): no breaks, intact empty. A run that has written no row yet
+(empty series): no CSV row, and alone a CSV of the header. Tolerance: relative 1e-12 (the CSV
+keeps Python's repr of each float).
 The figure (plot_bonds.draw, smoothing off): each break drawn at the rho of the row at or after
 it, the pass's last row for one after it: pass 1 at 0, 10, 12, 32, 32 mm (steps 1, 40 -> row 40,
 41 -> row 45, 97 and 98 -> row 95), pass 2 at 0, 14, 30 mm (steps 99, 150 -> row 153, 196 -> row
@@ -33,7 +36,7 @@ last pass's last row (196) to none, and the intact count at a pass's end was tha
 --csv of a run with no row yet.
 Also: the PNG is written and non-empty, with and without --log (the two differ); bad input (a
 missing file, a file without /scoop/time, an even or non-integer --smooth, a wrong --labels count,
-no -o, an output that cannot be written) gives exit 2 and exactly one line on stderr."""
+no -o) gives exit 2 and exactly one line on stderr."""
 
 import csv
 import importlib.util
@@ -55,6 +58,8 @@ MADE = 1000        # bonds made
 CONTACT = {1: 3, 2: 4}
 SCALE = {1: 1.0, 2: 100.0}
 BREAKS = [(1, 1), (40, 2), (41, 2), (97, 1), (98, 2), (99, 1), (150, 1), (196, 2)]
+COLUMNS = ["run", "pass", "mean_F_N", "peak_F_N", "mean_Fz_scoop_N", "broken_tension",
+           "broken_shear", "intact_at_end", "collected_kg", "rho_end_m", "complete"]
 F_A, F_B = np.array([3.0, 0.0, -4.0]), np.array([0.0, 12.0, 5.0])  # |F| 5 and 13 N
 
 
@@ -118,6 +123,23 @@ def write_unbonded(path):
         f["scoop/collected_mass"] = np.array([0.005])
 
 
+# A writer that holds a copy of a file open in SWMR mode (as a run holds its output) until its
+# stdin closes: argv[1] the file, argv[2] the copy.
+SWMR_WRITER = """
+import sys, h5py
+with h5py.File(sys.argv[1], "r") as src, h5py.File(sys.argv[2], "w", libver="latest") as dst:
+    names = []
+    src.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
+    for n in names:
+        v = src[n][()]
+        dst.create_dataset(n, data=v, maxshape=(None,) + v.shape[1:], chunks=True)
+    dst.swmr_mode = True
+    dst.flush()
+    print("ready", flush=True)
+    sys.stdin.read()
+"""
+
+
 def run(args):
     return subprocess.run([sys.executable, SCRIPT] + args, capture_output=True, text=True)
 
@@ -141,51 +163,68 @@ def main():
         write_run(full)
         write_run(cut, cut_step=158)
         write_unbonded(loose)
+        empty = os.path.join(tmp, "empty.h5")  # a run with no row yet
+        with h5py.File(empty, "w") as f:
+            for k in ("time", "pass", "rho_path"):
+                f["scoop/" + k] = np.zeros(0)
+            f["scoop/force_scoop"] = np.zeros((0, 3))
         png, png_log, table = (os.path.join(tmp, n) for n in ("f.png", "f_log.png", "s.csv"))
-        r = run([full, cut, loose, "-o", png, "--csv", table, "--smooth", "3"])
+        r = run([full, cut, loose, empty, "-o", png, "--csv", table, "--smooth", "3"])
         assert r.returncode == 0, r.stderr
+        with open(png, "rb") as f:
+            linear = f.read()
         with open(table) as f:
             got = {(row["run"], row["pass"]): row for row in csv.DictReader(f)}
         assert sorted(got) == [("cut", "1"), ("cut", "2"), ("full", "1"), ("full", "2"),
                                ("loose", "1")], sorted(got)
         pass1 = {"mean_F_N": 165 / 17, "peak_F_N": 13.0, "mean_Fz_scoop_N": 22 / 17,
                  "broken_tension": 2, "broken_shear": 3, "intact_at_end": 995,
-                 "collected_kg": 0.01}
+                 "collected_kg": 0.01, "rho_end_m": 0.032, "complete": 1}
         check_pass(got[("full", "1")], pass1)
         check_pass(got[("full", "2")], {
             "mean_F_N": 100 * 160 / 16, "peak_F_N": 1300.0, "mean_Fz_scoop_N": 100 * 26 / 16,
-            "broken_tension": 2, "broken_shear": 1, "intact_at_end": 992, "collected_kg": 0.02})
+            "broken_tension": 2, "broken_shear": 1, "intact_at_end": 992, "collected_kg": 0.02,
+            "rho_end_m": 0.030, "complete": 1})
         check_pass(got[("cut", "1")], pass1)
         check_pass(got[("cut", "2")], {
-            "broken_tension": 2, "broken_shear": 0, "intact_at_end": 993, "collected_kg": ""})
-        check_pass(got[("loose", "1")], {
-            "mean_F_N": 0.5, "peak_F_N": 0.5, "mean_Fz_scoop_N": 0.4, "broken_tension": 0,
-            "broken_shear": 0, "intact_at_end": "", "collected_kg": 0.005})
-
-        # A run with no row yet: a CSV of the header alone.
-        empty = os.path.join(tmp, "empty.h5")
-        with h5py.File(empty, "w") as f:
-            for k in ("time", "pass", "rho_path"):
-                f["scoop/" + k] = np.zeros(0)
-            f["scoop/force_scoop"] = np.zeros((0, 3))
-        r = run([empty, "-o", png, "--csv", table])
+            "broken_tension": 2, "broken_shear": 0, "intact_at_end": 993, "collected_kg": "",
+            "rho_end_m": 0.016, "complete": 0})
+        # The cut run read while a writer holds it (SWMR), as a run in progress.
+        live = os.path.join(tmp, "live.h5")
+        writer = subprocess.Popen([sys.executable, "-c", SWMR_WRITER, cut, live],
+                                  stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        try:
+            assert writer.stdout.readline().strip() == "ready"
+            r = run([live, "-o", png, "--csv", table, "--smooth", "3"])
+        finally:
+            writer.stdin.close()
+            writer.wait()
         assert r.returncode == 0, r.stderr
         with open(table) as f:
-            assert len(f.read().strip().splitlines()) == 1
+            live_rows = {row["pass"]: row for row in csv.DictReader(f)}
+        assert sorted(live_rows) == ["1", "2"], live_rows
+        for p in ("1", "2"):
+            assert {k: v for k, v in live_rows[p].items() if k != "run"} == {
+                k: v for k, v in got[("cut", p)].items() if k != "run"}, (live_rows[p],
+                                                                           got[("cut", p)])
+        check_pass(got[("loose", "1")], {
+            "mean_F_N": 0.5, "peak_F_N": 0.5, "mean_Fz_scoop_N": 0.4, "broken_tension": 0,
+            "broken_shear": 0, "intact_at_end": "", "collected_kg": 0.005, "complete": 1})
+
+        # A run with no row yet, alone: the CSV's header.
+        r = run([empty, "-o", png_log, "--csv", table])
+        assert r.returncode == 0, r.stderr
+        with open(table) as f:
+            assert f.read().strip() == ",".join(COLUMNS), "expected the header alone"
 
         # The PNG, linear and log: written, non-empty, and not the same picture.
-        r = run([full, loose, "-o", png_log, "--log"])
+        r = run([full, cut, loose, "-o", png_log, "--smooth", "3", "--log"])
         assert r.returncode == 0, r.stderr
-        with open(png, "rb") as f:
-            linear = f.read()
         with open(png_log, "rb") as f:
             logged = f.read()
         for data in (linear, logged):
             assert data.startswith(b"\x89PNG") and len(data) > 1000, len(data)
-        r = run([full, loose, "-o", png])
-        assert r.returncode == 0, r.stderr
-        with open(png, "rb") as f:
-            assert f.read() != logged, "--log drew the same picture as the linear axis"
+        assert linear != logged, "--log drew the same picture as the linear axis"
 
         # The figure's lines: the breaks' rho and the |F| axis, linear and log.
         spec = importlib.util.spec_from_file_location("plot_bonds", SCRIPT)
@@ -213,7 +252,7 @@ def main():
         expect_refused(run, [
             ([missing, "-o", png], missing),
             ([no_time, "-o", png], "/scoop/time"),
-            ([empty, "-o", png, "--csv", os.path.join(tmp, "no", "s.csv")], "--csv"),
+            ([full, "-o", png, "--csv", os.path.join(tmp, "no", "s.csv")], "--csv"),
             ([empty, "-o", os.path.join(tmp, "no", "f.png")], "-o"),
             ([full, "-o", png, "--smooth", "4"], "--smooth"),
             ([full, "-o", png, "--smooth", "abc"], "--smooth"),
