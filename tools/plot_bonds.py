@@ -210,7 +210,7 @@ def draw(runs, labels, window, log):
                       linestyle=style, label="%s, pass %d" % (label, p))
     if log:
         ax_f.set_yscale("log")
-        ax_f.set_ylabel("|F| on the scoop [N] (moving average; log, floor %g N)" % LOG_FLOOR_N)
+        ax_f.set_ylabel("|F| on the scoop [N] (moving average, log)")
     else:
         ax_f.set_ylabel("|F| on the scoop [N] (moving average)")
     ax_b.set_ylabel("bonds broken in the pass")
