@@ -17,24 +17,24 @@
 //                Brazilian disc; a round disk of coarse spheres touches a platen on one sphere).
 // W and D are chosen so that each sample holds about `particles` spheres.
 //
-// A test (RunPlatenTest): the sample without gravity relaxes unbonded for 500 steps and is
-// stopped; every pair of spheres whose surfaces are closer than `gap` is bonded
-// (System::PairsWithinGap, dem::MakeBond with the row's strength scale), spheres left with fewer
-// than 3 bonds removed first (Potyondy & Cundall's "floaters"). It is loaded through gripped
-// ends: the spheres whose centres lie within one mean diameter of its lowest and highest points
-// are the grips, driven vertically at +-v/2 each (their vertical velocity is set every step so
-// that velocity Verlet moves them exactly so; the prism's are free sideways and in rotation, as
-// on frictionless platens but unable to part from them; the disk's are held sideways, as by
-// jaws with friction), so that the load enters through all the end spheres' bonds at once. Loaded
-// through platens instead (rigid meshes bearing on the ends' spheres through Hertz contacts), a few
-// end contacts carried the whole load and set the peak: the strengths were not proportional to the
-// bond strengths (UCS x2.9 and sigma_t x11 for a doubling) and depended on the speed (+46% at half
-// of it). The load P is the mean of the forces the two grips bear from the rest of the sample
-// (their own bonds and contacts cancel in each grip's sum), averaged over blocks of one wave
-// transit of the sample; the platen strain is the grips' travel over the sample's height at the
-// start, eps = v t / h0. The test stops once P has fallen below `stop_fraction` of its peak with
-// bonds broken and the grips half as far again as at the peak (failure), or at `max_strain` (the
-// limit: unbreakable bonds end there).
+// A test (RunPlatenTest): the sample without gravity relaxes unbonded by kinetic damping until no
+// contact pushes (at most 5000 steps) and is stopped; every pair of spheres whose surfaces are
+// closer than `gap` is bonded (System::PairsWithinGap, dem::MakeBond with the row's strength
+// scale), spheres left with fewer than 3 bonds removed first (Potyondy & Cundall's "floaters"). It
+// is loaded through gripped ends: the spheres whose centres lie within one mean diameter of its
+// lowest and highest points are the grips, driven vertically at +-v/2 each (their vertical velocity
+// is set every step so that velocity Verlet moves them exactly so; the prism's are free sideways
+// and in rotation, as on frictionless platens but unable to part from them; the disk's are held
+// sideways, as by jaws with friction), so that the load enters through all the end spheres' bonds
+// at once. Loaded through platens instead (rigid meshes bearing on the ends' spheres through Hertz
+// contacts), a few end contacts carried the whole load and set the peak: the strengths were not
+// proportional to the bond strengths (UCS x2.9 and sigma_t x11 for a doubling) and depended on the
+// speed (+46% at half of it). The load P is the mean of the forces the two grips bear from the rest
+// of the sample (their own bonds and contacts cancel in each grip's sum), averaged over blocks of
+// one wave transit of the sample; the platen strain is the grips' travel over the sample's height
+// at the start, eps = v t / h0. The test stops once P has fallen below `stop_fraction` of its peak
+// with bonds broken and the grips half as far again as at the peak (failure), or at `max_strain`
+// (the limit: unbreakable bonds end there).
 //   UCS        = P_peak / W^2                              (the prism's cross-section)
 //   sigma_t    = 2 P_peak / (pi D t)                       (ISRM 1978 suggested method, Brazilian;
 //                the disk's two flats are its grips)
