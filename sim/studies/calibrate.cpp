@@ -412,12 +412,16 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
     if (f >= 0.2 && f <= 0.3) low_band.push_back(system.particles().id[i]);
     if (f >= 0.7 && f <= 0.8) high_band.push_back(system.particles().id[i]);
   }
+  // Each sphere's storage index by persistent id, made again after every step (a step may
+  // reorder the storage); the gauge, the grips' drive and their forces read it.
   std::vector<size_t> at(static_cast<size_t>(ids.back()) + 1);
+  auto index_ids = [&] {
+    for (size_t i = 0; i < moving.size(); ++i) at[static_cast<size_t>(moving.id[i])] = i;
+  };
+  index_ids();
   auto band_height = [&](const std::vector<int64_t>& band) {
-    const dem::Particles& p = system.particles();
-    for (size_t i = 0; i < p.size(); ++i) at[static_cast<size_t>(p.id[i])] = i;
     double sum = 0;
-    for (const int64_t id : band) sum += p.x[at[static_cast<size_t>(id)]].z;
+    for (const int64_t id : band) sum += moving.x[at[static_cast<size_t>(id)]].z;
     return band.empty() ? 0.0 : sum / band.size();
   };
   low0 = band_height(low_band);
@@ -433,11 +437,9 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
   // Each step the grips' vertical velocity is set so that velocity Verlet's first half kick
   // (v += f dt / 2m, the force of the last step) brings it to +-v/2 before the drift: the grips
   // move as the platens would, and whatever they are pushed or pulled with is the load.
-  dem::Particles& moved = system.mutable_particles();
   auto grip_force = [&](const std::vector<int64_t>& grip) {
-    for (size_t i = 0; i < moved.size(); ++i) at[static_cast<size_t>(moved.id[i])] = i;
     double sum = 0;
-    for (const int64_t id : grip) sum += moved.f[at[static_cast<size_t>(id)]].z;
+    for (const int64_t id : grip) sum += moving.f[at[static_cast<size_t>(id)]].z;
     return sum;
   };
   // The prism's grips are free sideways (frictionless platens); the disk's are held sideways too,
@@ -447,21 +449,21 @@ PlatenTestResult RunPlatenTest(const BondSample& sample, const PlatenTestSpec& s
   auto drive = [&](const std::vector<int64_t>& grip, double speed) {
     for (const int64_t id : grip) {
       const size_t i = at[static_cast<size_t>(id)];
-      const double kick = 0.5 * dt * moved.inv_mass[i];
-      moved.v[i].z = speed - kick * moved.f[i].z;
+      const double kick = 0.5 * dt * moving.inv_mass[i];
+      moving.v[i].z = speed - kick * moving.f[i].z;
       if (held_sideways) {
-        moved.v[i].x = -kick * moved.f[i].x;
-        moved.v[i].y = -kick * moved.f[i].y;
+        moving.v[i].x = -kick * moving.f[i].x;
+        moving.v[i].y = -kick * moving.f[i].y;
       }
     }
   };
   for (int64_t step = 0; step < max_steps; ++step) {
-    for (size_t i = 0; i < moved.size(); ++i) at[static_cast<size_t>(moved.id[i])] = i;
     drive(bottom_grip, 0.5 * sense * v);
     drive(top_grip, -0.5 * sense * v);
     const dem::StepStatus status = system.Step();
     if ((status.flags & ~static_cast<uint32_t>(dem::kExcessiveOverlap)) != 0)
       throw std::runtime_error("calibrate bonds: the test went unstable: " + status.message);
+    index_ids();
     out.steps = step + 1;
     out.max_overlap = std::max(out.max_overlap, system.neighbor_stats().max_overlap);
     for (const dem::BondBreak& b : system.TakeBondBreaks()) {
