@@ -48,8 +48,11 @@ FIELDS = ["run", "pass", "mean_F_N", "peak_F_N", "mean_Fz_scoop_N", "broken_tens
           "broken_shear", "intact_at_end", "collected_kg", "rho_end_m", "complete"]
 
 
-class InputError(Exception):
-    """Bad input: the message is the one line to print."""
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import plot_wrench  # noqa: E402  (a run file's opening, live or not, and its bad-input error)
+
+InputError = plot_wrench.InputError
+open_run = plot_wrench.open_run
 
 
 class Parser(argparse.ArgumentParser):
@@ -65,19 +68,6 @@ def need(f, path, name):
         raise InputError("%s: missing dataset %s (expected a scoopsim run file of a dig)"
                          % (path, name))
     return f[name][()]
-
-
-def open_run(path):
-    if not os.path.isfile(path):
-        raise InputError("%s: no such file (expected a scoopsim run file, .h5)" % path)
-    try:
-        return h5py.File(path, "r", swmr=True)  # readable while the run is still writing
-    except (OSError, ValueError):
-        pass
-    try:
-        return h5py.File(path, "r")
-    except OSError as e:
-        raise InputError("%s: not an HDF5 file (%s)" % (path, e))
 
 
 def read_run(path):
