@@ -167,14 +167,17 @@ def read_run(path, urdf_path=None):
             raise InputError("%s: no /arm/ group (expected a run of a scene with an arm: block, "
                              "scoopsim run -o)" % path)
         run = {"path": path}
+        for group, names in (("arm", PER_ROW), ("scoop", SCOOP)):
+            for name in names:
+                if group + "/" + name not in f:
+                    raise InputError("%s: missing dataset /%s/%s" % (path, group, name))
+        # The rows both groups hold in full: each group's time is written last in a flush, so a
+        # file killed in a flush (or read while its run writes) may hold more of the others.
+        rows = min(f["arm/time"].shape[0], f["scoop/time"].shape[0])
         for name in PER_ROW:
-            if "arm/" + name not in f:
-                raise InputError("%s: missing dataset /arm/%s" % (path, name))
-            run[name] = f["arm/" + name][()]
+            run[name] = f["arm/" + name][:rows]
         for name in SCOOP:
-            if "scoop/" + name not in f:
-                raise InputError("%s: missing dataset /scoop/%s" % (path, name))
-            run["scoop_" + name] = f["scoop/" + name][()]
+            run["scoop_" + name] = f["scoop/" + name][:rows]
         for name in ("arm_joints", "arm_urdf", "arm_base_x", "arm_base_y", "arm_base_z",
                      "arm_base_yaw"):
             if name not in f.attrs:
@@ -184,7 +187,7 @@ def read_run(path, urdf_path=None):
         run["yaw"] = float(f.attrs["arm_base_yaw"])
         # The limit the arm saturated at: the URDF's times the derate (files before the derate
         # had its own dataset hold the product in effort_limit).
-        run["limit"] = run["effort_limit"] * (f["arm/effort_derate"][()]
+        run["limit"] = run["effort_limit"] * (f["arm/effort_derate"][:rows]
                                               if "arm/effort_derate" in f else 1.0)
         run["events"] = read_events(f)
         urdf = urdf_path or str(f.attrs["arm_urdf"])

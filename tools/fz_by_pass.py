@@ -57,13 +57,14 @@ def row_segments(pose):
 def analyse(path):
     with h5py.File(path, "r") as f:
         s = f["scoop"]
-        passes = np.rint(s["pass"][()]).astype(int)
-        rho_name = "rho_path" if "rho_path" in s else "rho"
-        rho = np.asarray(s[rho_name][()], dtype=float)
-        contacts = np.asarray(s["contacts"][()], dtype=float)
-        force = np.asarray(s["force_scoop"][()], dtype=float)
-        pose = np.asarray(s["pose"][()], dtype=float)
         time = np.asarray(s["time"][()], dtype=float)
+        n = len(time)  # time is written last in a flush: a killed file may hold more of the rest
+        passes = np.rint(s["pass"][:n]).astype(int)
+        rho_name = "rho_path" if "rho_path" in s else "rho"
+        rho = np.asarray(s[rho_name][:n], dtype=float)
+        contacts = np.asarray(s["contacts"][:n], dtype=float)
+        force = np.asarray(s["force_scoop"][:n], dtype=float)
+        pose = np.asarray(s["pose"][:n], dtype=float)
         surface = float(f.attrs["surface"]) if "surface" in f.attrs else np.nan
     name = os.path.splitext(os.path.basename(path))[0]
     means, firsts, curves = [], [], []

@@ -71,9 +71,10 @@ def read_run(path, joint):
                                  "arm: block)" % (path, name))
         joints = str(f.attrs.get("arm_joints", "")).split(",")
         time = f["arm/time"][()]
-        demanded, applied, limit = (f["arm/" + n][()] for n in REQUIRED[1:])
+        n = len(time)  # time is written last in a flush: a killed file may hold more of the rest
+        demanded, applied, limit = (f["arm/" + name][:n] for name in REQUIRED[1:])
         if "arm/effort_derate" in f:  # the URDF's limit and the derate beside it
-            limit = limit * f["arm/effort_derate"][()]
+            limit = limit * f["arm/effort_derate"][:n]
         if demanded.shape != (len(time), len(joints)):
             raise InputError("%s: /arm/torque_demanded has shape %s, expected (%d, %d) (one "
                              "column per joint of arm_joints)"

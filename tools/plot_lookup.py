@@ -253,9 +253,11 @@ def case_segments(t, cases_dir, m, b, pass_, notes, what):
     path = os.path.join(cases_dir, rel)
     try:
         with h5py.File(path, "r") as f:
-            rows = np.rint(f["scoop/pass"][()]).astype(int) == pass_
-            rho_mm = 1e3 * np.asarray(f[t["rho_dataset"]][()], dtype=float)[rows]
-            pose = np.asarray(f["scoop/pose"][()], dtype=float)[rows]
+            # A group's time is written last in a flush: a killed file may hold more of the rest.
+            n = f["scoop/time"].shape[0] if "scoop/time" in f else None
+            rows = np.rint(f["scoop/pass"][:n]).astype(int) == pass_
+            rho_mm = 1e3 * np.asarray(f[t["rho_dataset"]][:n], dtype=float)[rows]
+            pose = np.asarray(f["scoop/pose"][:n], dtype=float)[rows]
     except (OSError, KeyError) as e:
         notes.append("%s: no segment marks (%s: %s; --cases names the sweep folder)"
                      % (what, path, e))

@@ -84,10 +84,12 @@ def read_run(f, path, frame, group):
         if scoop + name not in f:
             raise InputError("%s: missing dataset %s%s (expected a scoopsim run file "
                              "with the scoop time series)" % (path, scoop, name))
-    run = {name: np.asarray(f[scoop + name][()], dtype=float) for name in names}
+    # A group's time is written last in each flush, so a file read while its run writes, or
+    # killed in a flush, may hold more rows in the other series: its rows are time's.
+    n = f[scoop + "time"].shape[0]
+    run = {name: np.asarray(f[scoop + name][:n], dtype=float) for name in names}
     mass = f[scoop + "collected_mass"][()] if scoop + "collected_mass" in f else None
-    pose = np.asarray(f[scoop + "pose"][()], dtype=float) if scoop + "pose" in f else None
-    n = run["time"].shape[0]
+    pose = np.asarray(f[scoop + "pose"][:n], dtype=float) if scoop + "pose" in f else None
     for name in names:
         want = (n, 3) if name.startswith(("force", "torque")) else (n,)
         if run[name].shape != want:

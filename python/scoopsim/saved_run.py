@@ -109,8 +109,26 @@ class SavedRun:
         if self._datasets[name] is None:
             with h5py.File(self.path, "r") as f:
                 d = f[name]
-                self._datasets[name] = Dataset(d[()], _attributes(name, d.attrs))
+                self._datasets[name] = Dataset(d[:_rows(f, name)] if d.shape else d[()],
+                                               _attributes(name, d.attrs))
         return self._datasets[name]
+
+
+def _rows(f, name):
+    """How many rows of dataset `name` to read: a series of a group with a time (scoop, arm,
+    series, bonds, bonds/broken) is cut to time's rows. scoopsim writes a group's time last in
+    each flush, so a file read while its run writes, or killed in a flush, may hold more rows
+    of the others (docs/files.md, "Crash-safe output")."""
+    group = name.rsplit("/", 1)[0] if "/" in name else ""
+    time = group + "/time"
+    if group and name != time and time in f and name not in _NOT_SERIES:
+        return min(f[name].shape[0], f[time].shape[0])
+    return f[name].shape[0]
+
+
+# Datasets of a group with a time that are not one row per sample: the fault events (one row
+# per event, written when the run ends). One row per pass (collected_mass) is never cut by min.
+_NOT_SERIES = {"arm/fault_events"}
 
 
 def open_run(path):

@@ -521,7 +521,7 @@ struct H5Output::Impl {
     const Series* longest = nullptr;
     const std::string* name = nullptr;
     for (const auto& [n, s] : series) {  // ties: a */time series
-      const bool time = n.size() >= 5 && n.compare(n.size() - 5, 5, "/time") == 0;
+      const bool time = IsTime(n);
       if (longest == nullptr || s.rows_flushed > longest->rows_flushed ||
           (s.rows_flushed == longest->rows_flushed && time)) {
         longest = &s;
@@ -776,8 +776,27 @@ struct H5Output::Impl {
     return entries;
   }
 
+  // Writes every series' buffered rows, each group's `time` last: the others first, then an
+  // H5Fflush puts them on disk, then the times. No write extends two datasets at once, so a kill
+  // inside a flush can leave a group's series of different lengths; this order makes `time` the
+  // shortest, and its length the rows every series of the group holds in full (the readers cut
+  // to it: h5::Reader::ReadSeries, docs/files.md "Crash-safe output"). The caller flushes again.
   void WriteAllRows() {
-    for (auto& [name, s] : series) WriteRows(name, s);
+    bool times_pending = false;
+    for (auto& [name, s] : series) {
+      if (IsTime(name)) {
+        times_pending = times_pending || s.PendingValues() > 0;
+      } else {
+        WriteRows(name, s);
+      }
+    }
+    if (!times_pending) return;
+    h5::CheckOk(H5Fflush(file.get(), H5F_SCOPE_LOCAL), "H5Fflush " + path);
+    for (auto& [name, s] : series)
+      if (IsTime(name)) WriteRows(name, s);
+  }
+  static bool IsTime(const std::string& name) {
+    return name.size() >= 5 && name.compare(name.size() - 5, 5, "/time") == 0;
   }
 };
 

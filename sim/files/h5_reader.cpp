@@ -83,16 +83,17 @@ Handle Reader::OpenDataset(const std::string& name) const {
 }
 
 hsize_t Reader::CheckShape(const std::string& name, hid_t dataset, H5T_class_t type_class,
-                           int64_t rows, hsize_t width) const {
+                           int64_t rows, hsize_t width, bool at_least) const {
   const Handle space(CheckId(H5Dget_space(dataset), "H5Dget_space " + name), H5Sclose);
   const int expected_rank = width == 1 ? 1 : 2;
   hsize_t dims[H5S_MAX_RANK] = {};
   const int rank = H5Sget_simple_extent_dims(space.get(), dims, nullptr);
-  const std::string want = rows < 0 ? "n" : std::to_string(rows);
+  const std::string want = rows < 0 ? "n" : (at_least ? ">= " : "") + std::to_string(rows);
   const std::string expected =
       "(" + want + (width == 1 ? std::string() : ", " + std::to_string(width)) + ")";
-  if (rank != expected_rank || (width > 1 && dims[1] != width) ||
-      (rows >= 0 && dims[0] != static_cast<hsize_t>(rows))) {
+  const bool rows_ok = rows < 0 || dims[0] == static_cast<hsize_t>(rows) ||
+                       (at_least && dims[0] > static_cast<hsize_t>(rows));
+  if (rank != expected_rank || (width > 1 && dims[1] != width) || !rows_ok) {
     std::string got = "(";
     for (int i = 0; i < rank; ++i) got += (i ? ", " : "") + std::to_string(dims[i]);
     Fail(name, "expected shape " + expected + ", got " + got + ")");
@@ -115,9 +116,30 @@ void Reader::ReadAll(const std::string& name, hid_t dataset, hid_t memory_type, 
   if (status < 0) Fail(name, "cannot be read (damaged file?)");
 }
 
-std::vector<dem::Vec3> Reader::ReadVectors(const std::string& name, int64_t rows) const {
-  int64_t n = 0;
-  const std::vector<double> flat = Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, 3, &n);
+void Reader::ReadFirstRows(const std::string& name, hid_t dataset, hid_t memory_type,
+                           int64_t rows, hsize_t width, void* data) const {
+  const int rank = width == 1 ? 1 : 2;
+  const hsize_t count[2] = {static_cast<hsize_t>(rows), width};
+  const hsize_t start[2] = {0, 0};
+  const Handle file_space(CheckId(H5Dget_space(dataset), "H5Dget_space " + name), H5Sclose);
+  CheckOk(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr),
+          "H5Sselect_hyperslab " + name);
+  const Handle memory_space(CheckId(H5Screate_simple(rank, count, nullptr), "H5Screate " + name),
+                            H5Sclose);
+  herr_t status = -1;
+  H5E_BEGIN_TRY {
+    status = H5Dread(dataset, memory_type, memory_space.get(), file_space.get(), H5P_DEFAULT, data);
+  }
+  H5E_END_TRY;
+  if (status < 0) Fail(name, "cannot be read (damaged file?)");
+}
+
+std::vector<dem::Vec3> Reader::ReadVectors(const std::string& name, int64_t rows,
+                                           bool series) const {
+  int64_t n = rows;
+  const std::vector<double> flat =
+      series && rows >= 0 ? ReadSeries<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, 3)
+             : Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, 3, &n);
   std::vector<dem::Vec3> out(static_cast<size_t>(n));
   for (size_t k = 0; k < out.size(); ++k) out[k] = {flat[3 * k], flat[3 * k + 1], flat[3 * k + 2]};
   return out;

@@ -227,8 +227,23 @@ class Reader {
     if (rows_read != nullptr) *rows_read = static_cast<int64_t>(n);
     return values;
   }
-  // Floating-point (rows x 3) as vectors; `rows` < 0 accepts any row count.
-  std::vector<dem::Vec3> ReadVectors(const std::string& name, int64_t rows) const;
+  // As Read, for a series of a run's group (/scoop, /arm, /series, /bonds): the first `rows`
+  // rows (the group's time's length) of a dataset that may hold more. H5Output writes a group's
+  // time last in each flush, so a kill inside a flush, or a reader of a live file, can find the
+  // other series longer than time, never shorter (docs/files.md, "Crash-safe output").
+  template <typename T>
+  std::vector<T> ReadSeries(const std::string& name, H5T_class_t type_class, hid_t memory_type,
+                            int64_t rows, hsize_t width) const {
+    const Handle dataset = OpenDataset(name);
+    CheckShape(name, dataset.get(), type_class, rows, width, /*at_least=*/true);
+    std::vector<T> values(static_cast<size_t>(rows) * width);
+    if (!values.empty()) ReadFirstRows(name, dataset.get(), memory_type, rows, width, values.data());
+    return values;
+  }
+  // Floating-point (rows x 3) as vectors; `rows` < 0 accepts any row count. With `series`, the
+  // first `rows` rows of a series that may hold more (ReadSeries).
+  std::vector<dem::Vec3> ReadVectors(const std::string& name, int64_t rows,
+                                     bool series = false) const;
   // A 1-D uint8 dataset written by WriteBytes, any length.
   std::vector<char> ReadBytes(const std::string& name) const;
   // A 1-D dataset of strings (variable- or fixed-length).
@@ -242,9 +257,12 @@ class Reader {
  private:
   Handle OpenDataset(const std::string& name) const;
   // Checks rank, extent and type class of `dataset`; returns its row count.
+  // With `at_least`, more than `rows` rows pass too.
   hsize_t CheckShape(const std::string& name, hid_t dataset, H5T_class_t type_class, int64_t rows,
-                     hsize_t width) const;
+                     hsize_t width, bool at_least = false) const;
   void ReadAll(const std::string& name, hid_t dataset, hid_t memory_type, void* data) const;
+  void ReadFirstRows(const std::string& name, hid_t dataset, hid_t memory_type, int64_t rows,
+                     hsize_t width, void* data) const;
   // Opens attribute `attribute` of `object`; Fail when it is missing.
   Handle OpenAttribute(const std::string& object, const std::string& attribute) const;
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -28,12 +29,57 @@ struct SavedRun::Impl {
       : file(h5::OpenForReading(path, true)), in(path, file.get()) {}
 };
 
+namespace {
+
+// The names of every link under the group `group`, relative to it ("id", "meshes/scoop"); with
+// `ok`, *ok = false instead of failing when they cannot all be read.
+std::set<std::string> LinksUnder(const h5::Reader& in, const std::string& group,
+                                 bool* ok = nullptr) {
+  std::set<std::string> names;
+  const auto add = [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
+    static_cast<std::set<std::string>*>(data)->insert(name);
+    return 0;
+  };
+  herr_t status = -1;
+  H5E_BEGIN_TRY {
+    status = H5Lvisit_by_name(in.file(), group.c_str(), H5_INDEX_NAME, H5_ITER_INC, add, &names,
+                              H5P_DEFAULT);
+  }
+  H5E_END_TRY;
+  if (ok != nullptr) *ok = status >= 0;
+  if (status < 0 && ok == nullptr) in.Fail(group, "cannot be read (damaged file?)");
+  return names;
+}
+
+// Whether the last snapshot `group` was written whole: a run killed while writing a snapshot
+// (written in one go and flushed after it, H5Output::WriteSnapshot) leaves it without its time
+// or short of datasets, or with a link to an object never written. Whole: its time and every
+// link the snapshot before it has (`previous`; for the first, the particle arrays up to `awake`,
+// the last one written), all readable.
+bool WrittenWhole(const h5::Reader& in, const std::string& group, const std::string& previous) {
+  if (!in.HasAttribute(group, "time")) return false;
+  bool readable = false;
+  const std::set<std::string> have = LinksUnder(in, group, &readable);
+  if (!readable) return false;  // a link to an object the kill kept off the disk
+  const std::set<std::string> need =
+      previous.empty() ? std::set<std::string>{"id", "position", "radius", "material", "awake"}
+                       : LinksUnder(in, previous);
+  return std::includes(have.begin(), have.end(), need.begin(), need.end());
+}
+
+}  // namespace
+
 SavedRun::SavedRun(const std::string& h5_path) : impl_(std::make_unique<Impl>(h5_path)) {
   const h5::Reader& in = impl_->in;
   if (!in.Exists("/snapshots")) return;
-  for (const std::string& name : in.List("/snapshots")) {
+  const std::vector<std::string> names = in.List("/snapshots");
+  for (size_t k = 0; k < names.size(); ++k) {
     SnapshotInfo info;
-    info.group = "/snapshots/" + name;
+    info.group = "/snapshots/" + names[k];
+    // The last one may be the snapshot a kill cut short: left out unless whole.
+    if (k + 1 == names.size() &&
+        !WrittenWhole(in, info.group, k > 0 ? "/snapshots/" + names[k - 1] : ""))
+      break;
     info.time = in.ReadDoubleAttribute(info.group, "time");
     impl_->snapshots.push_back(info);
   }
@@ -82,16 +128,19 @@ ScoopSeries SavedRun::Scoop() const {
   if (!in.Exists("/scoop/time")) return s;
   int64_t n = 0;
   s.time = in.Read<double>("/scoop/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1, &n);
-  // The other series have /scoop/time's length (H5Output writes a row of each per sample).
+  // The other series hold at least /scoop/time's rows (H5Output writes a row of each per
+  // sample, and time last in a flush: a killed or live file can hold more of the others).
   const auto column = [&](const char* name, hsize_t width) {
-    return in.Exists(name) ? in.Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, n, width)
+    return in.Exists(name) ? in.ReadSeries<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, n, width)
                            : std::vector<double>();
   };
   for (double pass : column("/scoop/pass", 1))
     s.pass.push_back(static_cast<int>(std::lround(pass)));
   s.rho = column("/scoop/rho", 1);
-  if (in.Exists("/scoop/force_world")) s.force_world = in.ReadVectors("/scoop/force_world", n);
-  if (in.Exists("/scoop/torque_world")) s.torque_world = in.ReadVectors("/scoop/torque_world", n);
+  if (in.Exists("/scoop/force_world"))
+    s.force_world = in.ReadVectors("/scoop/force_world", n, /*series=*/true);
+  if (in.Exists("/scoop/torque_world"))
+    s.torque_world = in.ReadVectors("/scoop/torque_world", n, /*series=*/true);
   const std::vector<double> pose = column("/scoop/pose", 7);
   for (size_t k = 0; k + 7 <= pose.size(); k += 7) {
     const double* q = &pose[k];
@@ -115,16 +164,17 @@ ArmSeries SavedRun::Arm() const {
   int64_t rows = 0;
   a.time = in.Read<double>("/arm/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1, &rows);
   a.torque_demanded =
-      in.Read<double>("/arm/torque_demanded", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
-  a.effort_limit = in.Read<double>("/arm/effort_limit", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
+      in.ReadSeries<double>("/arm/torque_demanded", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
+  a.effort_limit =
+      in.ReadSeries<double>("/arm/effort_limit", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
   if (in.Exists("/arm/effort_derate")) {
     const std::vector<double> derate =
-        in.Read<double>("/arm/effort_derate", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
+        in.ReadSeries<double>("/arm/effort_derate", H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, n);
     for (size_t k = 0; k < a.effort_limit.size(); ++k) a.effort_limit[k] *= derate[k];
   }
   // uint64 since issue 40; float64 in older files (HDF5 converts either).
   a.fault_latched =
-      in.Read<uint64_t>("/arm/fault_latched", H5T_NO_CLASS, H5T_NATIVE_UINT64, rows, 1);
+      in.ReadSeries<uint64_t>("/arm/fault_latched", H5T_NO_CLASS, H5T_NATIVE_UINT64, rows, 1);
   return a;
 }
 
@@ -134,22 +184,23 @@ BondSeries SavedRun::Bonds() const {
   if (in.Exists("/bonds/time")) {
     int64_t n = 0;
     s.time = in.Read<double>("/bonds/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1, &n);
-    s.intact = in.Read<double>("/bonds/intact", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
+    s.intact = in.ReadSeries<double>("/bonds/intact", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
   }
   if (!in.Exists("/bonds/broken/time")) return s;
   int64_t m = 0;
   s.broken_time = in.Read<double>("/bonds/broken/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1, &m);
   const std::vector<uint64_t> pair =
-      in.Read<uint64_t>("/bonds/broken/pair", H5T_INTEGER, H5T_NATIVE_UINT64, m, 2);
+      in.ReadSeries<uint64_t>("/bonds/broken/pair", H5T_INTEGER, H5T_NATIVE_UINT64, m, 2);
   for (int64_t k = 0; k < m; ++k) {
     s.broken_a.push_back(static_cast<int64_t>(pair[2 * k]));
     s.broken_b.push_back(static_cast<int64_t>(pair[2 * k + 1]));
   }
-  s.broken_position = in.ReadVectors("/bonds/broken/position", m);
+  s.broken_position = in.ReadVectors("/bonds/broken/position", m, /*series=*/true);
   for (uint64_t mode :
-       in.Read<uint64_t>("/bonds/broken/mode", H5T_INTEGER, H5T_NATIVE_UINT64, m, 1))
+       in.ReadSeries<uint64_t>("/bonds/broken/mode", H5T_INTEGER, H5T_NATIVE_UINT64, m, 1))
     s.broken_mode.push_back(static_cast<int>(mode));
-  s.broken_stress = in.Read<double>("/bonds/broken/stress", H5T_FLOAT, H5T_NATIVE_DOUBLE, m, 1);
+  s.broken_stress =
+      in.ReadSeries<double>("/bonds/broken/stress", H5T_FLOAT, H5T_NATIVE_DOUBLE, m, 1);
   return s;
 }
 

@@ -89,18 +89,18 @@ CaseRows ReadCase(const fs::path& path, RhoDefinition rho) {
   if (!r.Exists("/scoop/time")) r.Fail("/scoop/time", "missing: not the output of a dig");
   int64_t n = 0;
   r.Read<double>("/scoop/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 1, &n);
-  c.pass = r.Read<double>("/scoop/pass", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
+  c.pass = r.ReadSeries<double>("/scoop/pass", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
   const char* rho_name = rho == RhoDefinition::kPath ? "/scoop/rho_path" : "/scoop/rho";
   if (!r.Exists(rho_name)) {
     r.Fail(rho_name,
            "missing (a run made before 2026-12-06 records only /scoop/rho: run the "
            "case again, or build with --rho along)");
   }
-  c.rho = r.Read<double>(rho_name, H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
-  c.contacts = r.Read<double>("/scoop/contacts", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
+  c.rho = r.ReadSeries<double>(rho_name, H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
+  c.contacts = r.ReadSeries<double>("/scoop/contacts", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
   c.wrench.resize(static_cast<size_t>(n));
   for (int s = 0; s < 4; ++s) {
-    const std::vector<dem::Vec3> v = r.ReadVectors(std::string("/scoop/") + kSeries[s], n);
+    const std::vector<dem::Vec3> v = r.ReadVectors(std::string("/scoop/") + kSeries[s], n, /*series=*/true);
     for (int64_t i = 0; i < n; ++i)
       for (int k = 0; k < 3; ++k) c.wrench[i][3 * s + k] = v[i][k];
   }

@@ -53,3 +53,22 @@ def test_ctrl_c_stops_a_run_with_its_output_closed(tmp_path, small_dig):
     run = scoopsim.open_run(out)  # a plain, readable file with the rows flushed at the stop
     assert 0 < len(run["scoop/time"])
     assert run["scoop/time"][-1] < 2.0  # stopped well before the dig's end (t = 2.97 s)
+
+
+def test_series_read_at_their_groups_time_length(tmp_path):
+    # A file killed inside a flush holds more rows in a group's other series than in its time
+    # (scoopsim writes time last, docs/files.md): open_run reads every series at time's length;
+    # a per-pass dataset (collected_mass) and a group without time keep all their rows.
+    path = str(tmp_path / "killed.h5")
+    with h5py.File(path, "w") as f:
+        f["scoop/time"] = np.arange(5) * 1e-3
+        f["scoop/force_world"] = np.ones((8, 3))
+        f["scoop/collected_mass"] = np.ones(1)
+        f["bonds/broken/time"] = np.arange(2.0)
+        f["bonds/broken/pair"] = np.ones((3, 2))
+        f["particles/radius"] = np.ones(9)
+    run = scoopsim.open_run(path)
+    assert run["scoop/force_world"].shape == (5, 3)
+    assert run["scoop/collected_mass"].shape == (1,)
+    assert run["bonds/broken/pair"].shape == (2, 2)
+    assert run["particles/radius"].shape == (9,)

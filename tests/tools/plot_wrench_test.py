@@ -15,8 +15,10 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 SCRIPT = os.path.join(ROOT, "tools", "plot_wrench.py")
 
 
-def make_run(path, passes=2, n=400, drop=None, seed=0):
-    """A run file shaped like scoopsim's: per pass, rho 0..0.45 m and a noisy wrench."""
+def make_run(path, passes=2, n=400, drop=None, seed=0, time_short_by=0):
+    """A run file shaped like scoopsim's: per pass, rho 0..0.45 m and a noisy wrench. With
+    time_short_by, /scoop/time lacks that many last rows, as in a file killed inside a flush
+    (scoopsim writes a group's time last)."""
     rng = np.random.default_rng(seed)
     rho = np.tile(np.linspace(0.0, 0.45, n), passes)
     pass_ = np.repeat(np.arange(1, passes + 1), n).astype(float)
@@ -27,6 +29,8 @@ def make_run(path, passes=2, n=400, drop=None, seed=0):
     for frame in ("body", "scoop", "world"):
         data["force_" + frame] = base + 0.2 * rng.standard_normal(base.shape)
         data["torque_" + frame] = 0.05 * base + 0.01 * rng.standard_normal(base.shape)
+    if time_short_by:
+        data["time"] = data["time"][:-time_short_by]
     with h5py.File(path, "w") as f:
         for name, value in data.items():
             if name != drop:
@@ -101,6 +105,16 @@ def main():
             png = os.path.join(d, frame + ".png")
             check_png(run([a, b, "-o", png, "--frame", frame, "--pass", "2", "--smooth", "10",
                            "--labels", "ice,snow"]), png, "two runs, %s frame, pass 2" % frame)
+        # Killed inside a flush: the other series 7 rows past time; read at time's length.
+        killed = os.path.join(d, "killed.h5")
+        make_run(killed, seed=3, time_short_by=7)
+        png = os.path.join(d, "killed.png")
+        check_png(run([killed, "-o", png]), png, "time 7 rows short of the other series")
+        sys.path.insert(0, os.path.join(ROOT, "tools"))
+        import plot_wrench
+        with plot_wrench.open_run(killed) as f:
+            got = plot_wrench.read_run(f, killed, "body", "")
+        assert got["force"].shape == (793, 3) and got["pose"].shape == (793, 7), got["force"].shape
         png = os.path.join(d, "sub", "raw.png")
         check_png(run([b, "-o", png, "--smooth", "1"]), png, "no smoothing, new folder")
 
