@@ -231,9 +231,11 @@ SweepCase MakeCase(const std::string& file, const std::string& default_base, con
   }
   // The case's text: the base's, a comment naming the case, its settings as --set lines. Its
   // lines are the base file's; the overrides' nodes carry lines from yaml_input::kSetLine on.
+  // The sweep file is not named: two sweep files that make the same case (lookup_snow.yaml's
+  // cases are lookup.yaml's) make the same text, so either finds the other's case done.
   std::string text = base_texts->at(base);
   if (!text.empty() && text.back() != '\n') text += '\n';
-  text += "# sweep " + file + ", case " + c.name + " of the base scene " + base + "\n";
+  text += "# sweep case " + c.name + " of the base scene " + base + "\n";
   const size_t first_set = yaml_input::SetsOf(text).size();  // the base's own, if any
   std::vector<std::string> sets;  // sets[k]: draft.settings[k]'s ("" for the key `scene`)
   std::vector<std::string> given;

@@ -113,6 +113,28 @@ cases:
       << text;
 }
 
+// Two sweep files that make the same case make the same scene text, so either finds the other's
+// case done (scenes/sweeps/lookup_snow.yaml runs lookup.yaml's snow cases while the ice bed is
+// poured). Until 2026-12-06 the text named the sweep file, and lookup.yaml saw the snow cases as
+// "made from another scene text".
+TEST(SweepFileTest, TheSameCaseFromAnotherSweepFileHasTheSameText) {
+  const sim::Sweep all = sim::LoadSweep(WriteSweep("all.yaml", R"(grid:
+  bed.material: [snow, ice]
+  dig.bite_depth: {b5: 0.005, b10: 0.01}
+)"));
+  const sim::Sweep snow = sim::LoadSweep(WriteSweep("snow_only.yaml", R"(grid:
+  bed.material: [snow]
+  dig.bite_depth: {b5: 0.005, b10: 0.01}
+)"));
+  ASSERT_EQ(all.cases.size(), 4u);
+  ASSERT_EQ(snow.cases.size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(snow.cases[i].name, all.cases[i].name);
+    EXPECT_EQ(snow.cases[i].scene.yaml_text, all.cases[i].scene.yaml_text);
+  }
+  EXPECT_NE(all.cases[0].scene.yaml_text, all.cases[1].scene.yaml_text);
+}
+
 TEST(SweepFileTest, ListIndexAndRemovalAreOverrides) {
   // tiny_scene.yaml: dig.trajectory.start [0.13, 0.08], dig.interval 2.0e-3.
   const sim::Sweep sweep = sim::LoadSweep(WriteSweep("index.yaml", R"(cases:
