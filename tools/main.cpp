@@ -47,6 +47,7 @@
 #include "sim/files/saved_run.h"
 #include "sim/input/exit_status.h"
 #include "sim/input/scene.h"
+#include "sim/input/yaml_input.h"
 #include "sim/loop/preflight.h"
 #include "sim/studies/calibrate.h"
 #include "sim/studies/commands.h"
@@ -330,17 +331,14 @@ struct RunArgs : SceneCommand {
 int RunCommand(const RunArgs& args) {
   if (args.scene.empty() && args.resume.empty())
     throw sim::InputError("run: SCENE: expected a scene file (or --resume OUT.h5)");
-  if (args.scene.empty() && !args.sets.empty())
-    throw sim::InputError(
-        "run: --set: expected a SCENE to set keys of (a run resumed without "
-        "one goes on with its checkpoint's scene, the --set it had included)");
   if (!args.resume.empty() && args.output_option->count() > 0 && args.output != args.resume)
     throw sim::InputError("run: -o " + args.output + " and --resume " + args.resume +
                           ": a resumed run writes the output it resumes; give one of them");
-  // Resumed without SCENE: the scene text and path its checkpoint holds.
+  // Resumed without SCENE: the scene text and path its checkpoint holds, and any --set after them
+  // (RunScene takes only more dig.passes: `--resume OUT --set dig.passes=N`).
   sim::Scene scene = !args.scene.empty() ? sim::LoadScene(args.scene, args.sets) : [&] {
     const sim::Checkpoint c = sim::ReadCheckpoint(sim::CheckpointPath(args.resume));
-    return sim::LoadSceneText(c.scene_path, c.scene_yaml);
+    return sim::LoadSceneText(c.scene_path, sim::yaml_input::TextWithSets(c.scene_yaml, args.sets));
   }();
   sim::Preflight(&scene, sim::Work::kRun);
   PrintWarnings(scene);
@@ -413,7 +411,8 @@ Command Run(CLI::App* parent) {
   command
       ->add_option("--resume", args->resume,
                    "Go on from OUT.restart.h5 of this output (SCENE, if given, must be the one it "
-                   "was made from); the output ends as the uninterrupted run's")
+                   "was made from, or it with more dig passes: --set dig.passes=N); the output "
+                   "ends as the uninterrupted run's")
       ->option_text("OUT.h5");
   args->scene_option->required(false);
   args->frames.AddTo(command, false, true);

@@ -1,5 +1,5 @@
-// The reading half of sim/files/internal_h5.h: opening a file read-only and h5::Reader, shared by the
-// bed files (bed_io.cpp) and the reader of saved runs (saved_run.cpp).
+// The reading half of sim/files/internal_h5.h: opening a file read-only and h5::Reader, shared by
+// the bed files (bed_io.cpp) and the reader of saved runs (saved_run.cpp).
 #include <hdf5.h>
 
 #include <algorithm>
@@ -116,8 +116,8 @@ void Reader::ReadAll(const std::string& name, hid_t dataset, hid_t memory_type, 
   if (status < 0) Fail(name, "cannot be read (damaged file?)");
 }
 
-void Reader::ReadFirstRows(const std::string& name, hid_t dataset, hid_t memory_type,
-                           int64_t rows, hsize_t width, void* data) const {
+void Reader::ReadFirstRows(const std::string& name, hid_t dataset, hid_t memory_type, int64_t rows,
+                           hsize_t width, void* data) const {
   const int rank = width == 1 ? 1 : 2;
   const hsize_t count[2] = {static_cast<hsize_t>(rows), width};
   const hsize_t start[2] = {0, 0};
@@ -139,7 +139,7 @@ std::vector<dem::Vec3> Reader::ReadVectors(const std::string& name, int64_t rows
   int64_t n = rows;
   const std::vector<double> flat =
       series && rows >= 0 ? ReadSeries<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, 3)
-             : Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, 3, &n);
+                          : Read<double>(name, H5T_FLOAT, H5T_NATIVE_DOUBLE, rows, 3, &n);
   std::vector<dem::Vec3> out(static_cast<size_t>(n));
   for (size_t k = 0; k < out.size(); ++k) out[k] = {flat[3 * k], flat[3 * k + 1], flat[3 * k + 2]};
   return out;

@@ -171,7 +171,8 @@ SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
 //   outside as the part's mesh), part int32 (T) (the part, 0.., in `meshes` order), pose
 //   (P x 7) (each part's body -> world pose: x y z [m], qw qx qy qz), so that a part's points
 //   are its body-frame vertices moved by its pose.
-// Meshes given as null are skipped. Written in the snapshot's own group (sim/files/snapshot_meshes.cpp).
+// Meshes given as null are skipped. Written in the snapshot's own group
+// (sim/files/snapshot_meshes.cpp).
 std::vector<MeshEntry> WriteSnapshotMeshes(hid_t file, const std::string& group,
                                            const std::vector<MeshView>& meshes);
 // The XDMF3 grids of the snapshots' meshes: per mesh name a temporal collection of Triangle grids
@@ -237,7 +238,8 @@ class Reader {
     const Handle dataset = OpenDataset(name);
     CheckShape(name, dataset.get(), type_class, rows, width, /*at_least=*/true);
     std::vector<T> values(static_cast<size_t>(rows) * width);
-    if (!values.empty()) ReadFirstRows(name, dataset.get(), memory_type, rows, width, values.data());
+    if (!values.empty())
+      ReadFirstRows(name, dataset.get(), memory_type, rows, width, values.data());
     return values;
   }
   // Floating-point (rows x 3) as vectors; `rows` < 0 accepts any row count. With `series`, the

@@ -100,7 +100,8 @@ CaseRows ReadCase(const fs::path& path, RhoDefinition rho) {
   c.contacts = r.ReadSeries<double>("/scoop/contacts", H5T_FLOAT, H5T_NATIVE_DOUBLE, n, 1);
   c.wrench.resize(static_cast<size_t>(n));
   for (int s = 0; s < 4; ++s) {
-    const std::vector<dem::Vec3> v = r.ReadVectors(std::string("/scoop/") + kSeries[s], n, /*series=*/true);
+    const std::vector<dem::Vec3> v =
+        r.ReadVectors(std::string("/scoop/") + kSeries[s], n, /*series=*/true);
     for (int64_t i = 0; i < n; ++i)
       for (int k = 0; k < 3; ++k) c.wrench[i][3 * s + k] = v[i][k];
   }

@@ -20,6 +20,7 @@
 #include "sim/files/h5_output.h"
 #include "sim/files/internal_h5.h"
 #include "sim/input/exit_status.h"
+#include "sim/input/yaml_input.h"
 #include "sim/loop/arm_driver.h"
 #include "sim/loop/bed.h"
 #include "sim/loop/preflight.h"
@@ -162,6 +163,30 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
   return status;
 }
 
+namespace {
+
+// Whether `scene` is the checkpoint's scene but for more dig passes: its document (the --set lines
+// applied) equals the stored one's once dig.passes is set alike, and it asks for more passes. Pass
+// k of a dig does not depend on how many follow it (World::Step begins the next pass when one
+// ends), so a run of fewer passes goes on into more and ends as a run planned with them: issue
+// 44's bonded digs, run one pass each first, go on into their second without running it again.
+bool MorePassesOf(const Checkpoint& checkpoint, const Scene& scene) {
+  if (!scene.dig.enabled) return false;
+  const Scene stored = LoadSceneText(checkpoint.scene_path, checkpoint.scene_yaml);
+  if (!stored.dig.enabled || scene.dig.passes <= stored.dig.passes) return false;
+  const auto document = [&](const std::string& text) {
+    YAML::Node root = yaml_input::ParseDocument(scene.path, text);
+    yaml_input::ApplySets(&root, yaml_input::SetsOf(text));
+    yaml_input::ApplySets(&root, {"dig.passes=0"});
+    YAML::Emitter out;
+    out << root;
+    return std::string(out.c_str());
+  };
+  return document(checkpoint.scene_yaml) == document(scene.yaml_text);
+}
+
+}  // namespace
+
 int RunScene(const Scene& scene, const RunOptions& options) {
   RefuseOutputOverScene(options.output, scene);
   CheckOutputPath(options.output);
@@ -186,9 +211,10 @@ int RunScene(const Scene& scene, const RunOptions& options) {
     Status("scoopsim: %s\n", TimeStepLine(scene).c_str());
   if (options.resume) {
     const Checkpoint checkpoint = ReadCheckpoint(restart);
-    if (checkpoint.scene_yaml != scene.yaml_text) {
+    if (checkpoint.scene_yaml != scene.yaml_text && !MorePassesOf(checkpoint, scene)) {
       throw InputError(restart + ": made from another scene text than " + scene.path +
-                       "'s (changed since?); resume with the scene it was made from");
+                       "'s (changed since?); resume with the scene it was made from (or with "
+                       "more dig.passes, --set dig.passes=N)");
     }
     const OutputCursor cursor = DecodeCursor(checkpoint.output_state, restart);
     world.OpenOutput(options.output, &cursor);

@@ -4,6 +4,8 @@
 // root attribute), as the uninterrupted run, for a plain run, a two-pass dig and a bed of clumps,
 // on 1 and 2 threads.
 // A checkpoint of another scene text or format version is refused with one line, exit 2.
+#include "sim/files/checkpoint.h"
+
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <signal.h>
@@ -23,6 +25,7 @@
 #include <tuple>
 #include <vector>
 
+#include "sim/files/saved_run.h"
 #include "tests/cli_util.h"
 
 namespace {
@@ -277,6 +280,49 @@ INSTANTIATE_TEST_SUITE_P(Kinds, ResumeTest,
                                   std::to_string(std::get<1>(info.param)) + "_threads";
                          });
 
+// A run of one pass, stopped in it and resumed with `--set dig.passes=2`, ends as the run planned
+// with two passes from the start, bit for bit (every dataset, the state hash, the root attributes:
+// the reference is given the same two --set lines, so their scene texts are equal). Oracle: the
+// uninterrupted two-pass run. Any other change is still refused (MismatchIsRefused).
+TEST(CheckpointTest, ResumedWithMorePassesEqualsTheRunPlannedWithThem) {
+  const std::string scene = WriteScene("dig");  // two passes of ~1.05 s each
+  const std::string common = " --threads 1 -q";
+  const std::string reference = (TempDir() / "passes_reference.h5").string();
+  const std::string out = (TempDir() / "passes.h5").string();
+  const std::string log = (TempDir() / "passes.log").string();
+  ASSERT_EQ(
+      scoopsim_test::RunScoopsim(
+          "run " + scene + " --set dig.passes=1 --set dig.passes=2 -o " + reference + common, log),
+      0)
+      << ReadText(log);
+  // One pass, checkpointed every 20 ms of wall time, stopped 0.5 s into the dig (mid-pass): the
+  // restart file keeps its last checkpoint, somewhere in pass 1.
+  ASSERT_EQ(scoopsim_test::RunScoopsim("run " + scene + " --set dig.passes=1 -o " + out + common +
+                                           " --checkpoint-every 0.02 --stop-after 0.5",
+                                       log),
+            0)
+      << ReadText(log);
+  const fs::path restart = TempDir() / "passes.restart.h5";
+  ASSERT_TRUE(fs::exists(restart));
+  EXPECT_LT(sim::ReadCheckpoint(restart.string()).time,
+            sim::SavedRun(reference).Scoop().time.front() + 1.0)
+      << "the checkpoint is not in pass 1";
+  ASSERT_EQ(scoopsim_test::RunScoopsim("run --resume " + out + " --set dig.passes=2" + common, log),
+            0)
+      << ReadText(log);
+  const auto want = Datasets(reference);
+  const auto got = Datasets(out);
+  ASSERT_GT(want.size(), 10u);
+  ASSERT_EQ(got.size(), want.size());
+  for (size_t k = 0; k < want.size(); ++k) {
+    EXPECT_EQ(got[k].first, want[k].first);
+    EXPECT_TRUE(got[k].second == want[k].second) << want[k].first << " differs";
+  }
+  EXPECT_EQ(StateHash(out), StateHash(reference));
+  EXPECT_EQ(RootAttributes(out), RootAttributes(reference));
+  EXPECT_EQ(sim::SavedRun(out).Scoop().pass.back(), 2);
+}
+
 // A checkpoint is refused with one line, exit 2, when the scene given is not the one it was made
 // from, or when its format version is another.
 TEST(CheckpointTest, MismatchIsRefused) {
@@ -297,7 +343,8 @@ TEST(CheckpointTest, MismatchIsRefused) {
   EXPECT_EQ(scoopsim_test::RunScoopsim("run " + scene + " --resume " + out + " -q", log), 2);
   std::string text = ReadText(log);
   EXPECT_EQ(text, "scoopsim: " + restart + ": made from another scene text than " + scene +
-                      "'s (changed since?); resume with the scene it was made from\n");
+                      "'s (changed since?); resume with the scene it was made from (or with "
+                      "more dig.passes, --set dig.passes=N)\n");
   // Another format version.
   const hid_t file = H5Fopen(restart.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   ASSERT_GE(file, 0);

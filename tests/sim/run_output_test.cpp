@@ -1,11 +1,12 @@
-// What `scoopsim run` and `scoopsim bed` leave behind when things go wrong (sim/studies/commands.cpp,
-// sim/files/h5_output.cpp), end to end through the binary on tiny_dig (1450 spheres): a run SIGKILLed
-// at random moments leaves a file that plain HDF5 readers open (C API, h5py, h5dump) holding a
-// prefix of the uninterrupted run's rows, at least those a reader saw before the kill; a second
-// run given the same output, a bed over an output being written, `-o` naming a FIFO or a device
-// and `-o` naming the scene's own bed are refused before any work; a full disk (the file size
-// limit, RLIMIT_FSIZE, or a 64 KiB tmpfs) gives one line and a file whose row counts are true; a
-// pour stopped by SIGINT or SIGKILL is kept and the same command goes on from it.
+// What `scoopsim run` and `scoopsim bed` leave behind when things go wrong
+// (sim/studies/commands.cpp, sim/files/h5_output.cpp), end to end through the binary on tiny_dig
+// (1450 spheres): a run SIGKILLed at random moments leaves a file that plain HDF5 readers open (C
+// API, h5py, h5dump) holding a prefix of the uninterrupted run's rows, at least those a reader saw
+// before the kill; a second run given the same output, a bed over an output being written, `-o`
+// naming a FIFO or a device and `-o` naming the scene's own bed are refused before any work; a full
+// disk (the file size limit, RLIMIT_FSIZE, or a 64 KiB tmpfs) gives one line and a file whose row
+// counts are true; a pour stopped by SIGINT or SIGKILL is kept and the same command goes on from
+// it.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <signal.h>
