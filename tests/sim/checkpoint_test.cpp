@@ -209,6 +209,21 @@ std::map<std::string, std::string> RootAttributes(const std::string& path) {
   return out;
 }
 
+// Every dataset of `out` equals the reference run's, by name and byte for byte; returns the
+// reference's datasets.
+std::vector<std::pair<std::string, std::vector<char>>> ExpectSameDatasets(
+    const std::string& reference, const std::string& out) {
+  const auto want = Datasets(reference);
+  const auto got = Datasets(out);
+  EXPECT_GT(want.size(), 10u);
+  EXPECT_EQ(got.size(), want.size());
+  for (size_t k = 0; k < want.size() && k < got.size(); ++k) {
+    EXPECT_EQ(got[k].first, want[k].first);
+    EXPECT_TRUE(got[k].second == want[k].second) << want[k].first << " differs";
+  }
+  return want;
+}
+
 class ResumeTest : public ::testing::TestWithParam<std::tuple<std::string, int>> {};
 
 TEST_P(ResumeTest, KilledAndResumedRunEqualsTheUninterrupted) {
@@ -248,14 +263,7 @@ TEST_P(ResumeTest, KilledAndResumedRunEqualsTheUninterrupted) {
   EXPECT_NE(ReadText(log).find("going on from " + restart.string()), std::string::npos)
       << ReadText(log);
   EXPECT_FALSE(fs::exists(restart)) << "kept after the run ended";
-  const auto want = Datasets(reference);
-  const auto got = Datasets(out);
-  ASSERT_GT(want.size(), 10u);
-  ASSERT_EQ(got.size(), want.size());
-  for (size_t k = 0; k < want.size(); ++k) {
-    EXPECT_EQ(got[k].first, want[k].first);
-    EXPECT_TRUE(got[k].second == want[k].second) << want[k].first << " differs";
-  }
+  const auto want = ExpectSameDatasets(reference, out);
   EXPECT_EQ(StateHash(out), StateHash(reference));
   EXPECT_EQ(StateHash(out).size(), 16u);
   // Bonds: the dig broke some (their records are among the datasets compared above).
@@ -310,14 +318,7 @@ TEST(CheckpointTest, ResumedWithMorePassesEqualsTheRunPlannedWithThem) {
   ASSERT_EQ(scoopsim_test::RunScoopsim("run --resume " + out + " --set dig.passes=2" + common, log),
             0)
       << ReadText(log);
-  const auto want = Datasets(reference);
-  const auto got = Datasets(out);
-  ASSERT_GT(want.size(), 10u);
-  ASSERT_EQ(got.size(), want.size());
-  for (size_t k = 0; k < want.size(); ++k) {
-    EXPECT_EQ(got[k].first, want[k].first);
-    EXPECT_TRUE(got[k].second == want[k].second) << want[k].first << " differs";
-  }
+  ExpectSameDatasets(reference, out);
   EXPECT_EQ(StateHash(out), StateHash(reference));
   EXPECT_EQ(RootAttributes(out), RootAttributes(reference));
   EXPECT_EQ(sim::SavedRun(out).Scoop().pass.back(), 2);
