@@ -270,6 +270,15 @@ void World::ResumeFrom(const Checkpoint& c, std::unique_ptr<ScoopDriver> driver,
     system_->RestoreState(c.dem_state);
     LoopFields(a);
     if (!a.done()) throw std::runtime_error("/world_state: bytes left over");
+    // Resumed with more passes than the checkpoint's run planned (RunScene takes that change):
+    // the progress line's plan is all of them. (The plan sets no datum, only the ETA and the
+    // room made in /snapshots.)
+    if (dig) {
+      double all = 0;
+      for (int pass = 1; pass <= scene_.dig.passes; ++pass)
+        all += dig_->driver->PlannedDuration(pass, dig_->bed);
+      dig_->planned = std::max(dig_->planned, all);
+    }
   } catch (const std::runtime_error& e) {
     throw InputError(source + ": " + e.what());
   }
