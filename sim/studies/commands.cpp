@@ -166,14 +166,15 @@ int MakeBed(const Scene& scene, const RunOptions& options) {
 namespace {
 
 // Whether `scene` is the checkpoint's scene but for more dig passes: its document (the --set lines
-// applied) equals the stored one's once dig.passes is set alike, and it asks for more passes. Pass
+// applied) equals the stored one's once dig.passes is set alike, and it asks for as many passes
+// or more (so a resume given the same --set dig.passes=N again is the same scene). Pass
 // k of a dig does not depend on how many follow it (World::Step begins the next pass when one
 // ends), so a run of fewer passes goes on into more and ends as a run planned with them: issue
 // 44's bonded digs, run one pass each first, go on into their second without running it again.
 bool MorePassesOf(const Checkpoint& checkpoint, const Scene& scene) {
   if (!scene.dig.enabled) return false;
   const Scene stored = LoadSceneText(checkpoint.scene_path, checkpoint.scene_yaml);
-  if (!stored.dig.enabled || scene.dig.passes <= stored.dig.passes) return false;
+  if (!stored.dig.enabled || scene.dig.passes < stored.dig.passes) return false;
   const auto document = [&](const std::string& text) {
     YAML::Node root = yaml_input::ParseDocument(scene.path, text);
     yaml_input::ApplySets(&root, yaml_input::SetsOf(text));
