@@ -22,9 +22,12 @@ DIR's layout (tools/report.sh makes the figures that come from other files, then
   DIR/lookup/                the lookup set's sweep folder (scoopsim sweep ... -o DIR/lookup:
                              table.h5, cases/), and tools/plot_lookup.py's lookup_fig9.png,
                              lookup_fig10.png, lookup_fig11.png, lookup_trends.csv
-  DIR/commands.txt           optional: lines `KEY: COMMAND` (KEY shape, size, balovnev, testbed
-                             or lookup; several lines a key allowed) shown as the section's
-                             command, e.g. the scene actually used
+  DIR/lookup/coarse_vs_fine.csv  tools/compare_tables.py COARSE FINE --csv ...: the coarse
+                             lookup table against the paper-resolution one, one row a cell
+                             (issue 39; its first '#' line records the command)
+  DIR/commands.txt           optional: lines `KEY: COMMAND` (KEY shape, size, balovnev, testbed,
+                             lookup or coarse_vs_fine; several lines a key allowed) shown as
+                             the section's command, e.g. the scene actually used
 A section's command: DIR/commands.txt's, else the one its files record (size_study.csv's and
 the Balovnev CSV's first '#' line name the scene), else the layout's default above.
 Exit status: 0 written (sections not run included); 2 bad input. Needs python3-numpy and
@@ -58,6 +61,12 @@ COMMANDS = {
     "testbed": ["tools/testbed_sand.sh DIR/testbed"],
     "lookup": ["build/scoopsim sweep scenes/sweeps/lookup_coarse.yaml -o DIR/lookup",
                "tools/plot_lookup.py DIR/lookup/table.h5 -o DIR/lookup"],
+    # The paper-resolution table (scenes/sweeps/lookup.yaml: its beds first, docs/studies.md)
+    # against the coarse one shipped in assets/.
+    "coarse_vs_fine": ["build/scoopsim sweep scenes/sweeps/lookup.yaml -o DIR/lookup_fine",
+                       "tools/compare_tables.py assets/lookup_coarse.csv DIR/lookup_fine/table.h5 "
+                       "--size-study bench/results/vm/size_study_20_2026-12-05.csv "
+                       "--csv DIR/lookup/coarse_vs_fine.csv --md DIR/lookup/coarse_vs_fine.md"],
 }
 
 STYLE = """
@@ -507,6 +516,65 @@ def lookup_section(rep):
     return body
 
 
+def coarse_vs_fine_section(rep):
+    path = rep.path("lookup", "coarse_vs_fine.csv")
+    if not os.path.isfile(path):
+        return None
+    import compare_tables
+    notes, rows = read_csv(path, "tools/compare_tables.py's columns")
+    need_columns(path, rows, compare_tables.OUT_COLUMNS)
+    made = [n for n in notes if n.startswith("tools/compare_tables.py ")]
+    if made:
+        rep.recorded["coarse_vs_fine"] = made[:1]
+    value = lambda r, c: float(r[c]) if r[c] != "" else float("nan")
+    both = [r for r in rows if r["status"] == "both"]
+    predicted = [(value(r, "predicted_peak_F_ratio"), value(r, "predicted_peak_T_ratio"))
+                 for r in rows[:1]]
+    body = ("<p>The lookup table on coarse particles against the paper-resolution one, cell by "
+            "cell (material, bite depth, pass): over the rho nodes where both tables hold data "
+            "(the rows `table export-csv` writes, rho 0 to the pass's rho_end), the mean and the "
+            "peak of |F| and of |T| of each, and their ratio coarse / fine. The particle-size "
+            "study gives peak |F| and |T| against particle size, so it predicts the peak ratio; "
+            "it measured snow, pass 1 of its own scene, so its prediction is for the snow pass-1 "
+            "cells, and for ice and later passes only a reference. A measured ratio near the "
+            "prediction says the coarse table errs as the size study says; far from it, more "
+            "than particle size separates the two (the dig, the pass, the material), and the "
+            "size study alone cannot correct the coarse table.</p>")
+    if predicted and all(np.isfinite(v) for v in predicted[0]):
+        body += ('<div class="verdict">Predicted (the size study, snow pass 1): peak |F| ratio '
+                 "%s, peak |T| ratio %s</div>" % (num(predicted[0][0]), num(predicted[0][1])))
+    else:
+        body += ('<p class="missing">No prediction: the comparison was run without '
+                 "--size-study.</p>")
+    body += "<pre>%s</pre>" % esc("\n".join(n for n in notes if n not in made))
+    summary = []
+    for mid in sorted({int(r["material_id"]) for r in both}):
+        sel = [r for r in both if int(r["material_id"]) == mid]
+        m = sel[0]["material"]
+        summary.append([m, len(sel)] + [compare_tables.median_range(
+            [value(r, c) for r in sel]) for c in compare_tables.RATIOS])
+    body += "<h3>Per material: median ratio (min .. max) over the cells in both</h3>"
+    body += table(("material", "cells", "mean |F|", "peak |F|", "mean |T|", "peak |T|"),
+                  summary) if summary else "<p>No cell is in both tables.</p>"
+    pred = lambda r, c: "-" if r[c] == "" else num(r[c]) + (
+        "" if r["prediction_applies"] == "1" else " (ref.)")
+    body += "<h3>Per cell (coarse / fine)</h3>" + table(
+        ("material", "bite depth [mm]", "pass", "status", "nodes", "rho_end coarse [mm]",
+         "rho_end fine [mm]", "peak |F|", "predicted", "peak |T|", "predicted", "mean |F|",
+         "mean |T|"),
+        [(r["material"], num(r["bite_depth_mm"]), r["pass"], r["status"], r["nodes"],
+          num(r["rho_end_mm_coarse"]) if r["rho_end_mm_coarse"] else "-",
+          num(r["rho_end_mm_fine"]) if r["rho_end_mm_fine"] else "-",
+          num(r["peak_F_ratio"]) if r["peak_F_ratio"] else "-", pred(r, "predicted_peak_F_ratio"),
+          num(r["peak_T_ratio"]) if r["peak_T_ratio"] else "-", pred(r, "predicted_peak_T_ratio"),
+          num(r["mean_F_ratio"]) if r["mean_F_ratio"] else "-",
+          num(r["mean_T_ratio"]) if r["mean_T_ratio"] else "-") for r in rows], left=(0, 3))
+    body += ("<p>predicted: the size study's snow pass-1 peak ratio; (ref.): a cell it does not "
+             "predict (ice, or a pass after the first). status: both, coarse_only or fine_only "
+             "(a cell in one table), no_common_nodes.</p>")
+    return body
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -525,7 +593,8 @@ def main(argv=None):
                 ("size", "Particle-size convergence of snow (eq. 5-7, Fig. 3-6)", size_section),
                 ("balovnev", "Balovnev's analytical model against the DEM", balovnev_section),
                 ("testbed", "The sand testbed (Fig. 12-13)", testbed_section),
-                ("lookup", "The lookup-set figures and trends (Fig. 9-11)", lookup_section)):
+                ("lookup", "The lookup-set figures and trends (Fig. 9-11)", lookup_section),
+                ("coarse_vs_fine", "Coarse against fine (issue 39)", coarse_vs_fine_section)):
             rep.add(key, title, make(rep))
         page = rep.html()
         os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)

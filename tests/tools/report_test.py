@@ -2,8 +2,9 @@
 """tools/report.sh and tools/report.py on a results folder of small fixtures written here (no
 DEM): a shape study's HDF5 (two templates, their /table and /scoop rows; report.sh draws its
 Fig. 8 PNG), a size study's CSV with `# verdict: largest_within_20pct_mm=4` and three PNGs, a
-Balovnev CSV and PNG, a testbed summary and PNG, and a synthetic wrench table (plot_lookup_test's;
-report.sh draws the lookup figures and trends). Checks:
+Balovnev CSV and PNG, a testbed summary and PNG, a synthetic wrench table (plot_lookup_test's;
+report.sh draws the lookup figures and trends) and lookup/coarse_vs_fine.csv
+(tools/compare_tables.py on compare_tables_test's synthetic tables and size study). Checks:
   - the page lists 9 figures and embeds each as a data URI whose bytes are the file's; every src
     is a data URI (nothing fetched);
   - the shape table's numbers, the size verdicts against the study's 3.5 mm (4 mm: coarser; with
@@ -11,17 +12,21 @@ report.sh draws the lookup figures and trends). Checks:
     and the command the CSV records (its scene), the
     Balovnev table's last row (the mean over the rows that cut: dem_horizontal = time, cut for
     time in [0.2, 0.8) at 0.02 s -> mean 0.49 exactly) and 10 span rows, the lookup ratio (10);
+  - the coarse-against-fine section: the prediction (5 / 1.75 = 2.857, 0.5 / 0.25 = 2), the
+    per-material medians (snow mean |F| 1.938 (1.375 .. 2.5)), the cell rows (snow 5 mm pass 1:
+    4 nodes, peak |F| 2.5 against 2.857, mean |F| 1.375; ice 15 mm pass 2's prediction marked a
+    reference; ice 3 mm pass 1 coarse_only) and the command its CSV records;
   - headless Chromium loads the page and every <img> has naturalWidth > 0 (an inline script added
     to a copy of the page marks each image); skipped (exit 77) when chromium is not installed
     (tools/install-deps.sh --test installs it);
   - report.sh run again redraws nothing and writes the same page;
-  - a folder with nothing: every section "Not run: <its command>", exit 0; with the lookup
+  - a folder with nothing: every section (6) "Not run: <its command>", exit 0; with the lookup
     sweep's table alone, only tools/plot_lookup.py is "not run";
   - the command shown: DIR/commands.txt's (shape), the one the files record (size), else the
     layout's (lookup), each said;
   - an input that exists but is unreadable (shape.h5 not HDF5, a PNG that is not one, a CSV
-    without its columns, a commands.txt line without a known key): one line on stderr naming
-    it, exit 2."""
+    without its columns, coarse_vs_fine.csv without its columns, a commands.txt line without a
+    known key): one line on stderr naming it, exit 2."""
 
 import base64
 import os
@@ -36,10 +41,12 @@ import h5py
 import numpy as np
 
 from cli_check import expect_refused, test_dir
+import compare_tables_test
 import plot_lookup_test
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 REPORT = os.path.join(ROOT, "tools", "report.py")
+COMPARE = os.path.join(ROOT, "tools", "compare_tables.py")
 WRAPPER = os.path.join(ROOT, "tools", "report.sh")
 # report.sh runs the scripts under $SCOOPSIM_PYTHON, else python3 on PATH: this Python, which has
 # numpy, h5py and matplotlib (a python3 first on PATH may lack them).
@@ -124,6 +131,19 @@ def write_testbed(d):
     write_png(os.path.join(d, "testbed_sand.png"))
 
 
+def write_coarse_vs_fine(d, tmp):
+    """DIR/lookup/coarse_vs_fine.csv: compare_tables.py on compare_tables_test's tables."""
+    coarse, fine = compare_tables_test.cells()
+    paths = [os.path.join(tmp, n) for n in ("coarse.csv", "fine.csv", "size.csv")]
+    compare_tables_test.write_csv(paths[0], coarse)
+    compare_tables_test.write_csv(paths[1], fine)
+    compare_tables_test.write_size_study(paths[2])
+    r = subprocess.run([sys.executable, COMPARE, paths[0], paths[1], "--size-study", paths[2],
+                        "--csv", os.path.join(d, "coarse_vs_fine.csv")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+
+
 def make_results(root):
     for sub in ("shape", "size", "balovnev", "testbed", "lookup"):
         os.makedirs(os.path.join(root, sub))
@@ -132,6 +152,7 @@ def make_results(root):
     write_balovnev(os.path.join(root, "balovnev"))
     write_testbed(os.path.join(root, "testbed"))
     plot_lookup_test.write_table(os.path.join(root, "lookup", "table.h5"))
+    write_coarse_vs_fine(os.path.join(root, "lookup"), os.path.dirname(root))
     with open(os.path.join(root, "commands.txt"), "w") as f:
         f.write("# what was run\nshape: build/scoopsim study shape scenes/shape_study_small.yaml "
                 "-o results/shape/shape.h5\n")
@@ -199,7 +220,7 @@ def main():
             and "Table 1" not in shape, shape
         assert ("Made by (commands.txt):</p><pre>build/scoopsim study shape "
                 "scenes/shape_study_small.yaml -o results/shape/shape.h5</pre>") in shape, shape
-        lookup = page[page.index('id="lookup"'):]
+        lookup = page[page.index('id="lookup"'):page.index('id="coarse_vs_fine"')]
         assert "Made by (the layout&#x27;s command: " in lookup, lookup[:400]
         size = page[page.index('id="size"'):page.index('id="balovnev"')]
         assert "largest_within_20pct_mm=4 &mdash; 4 mm, coarser than the study" in size, size
@@ -218,6 +239,19 @@ def main():
         assert "mean_F_ratio_geomean" in page
         assert "The table (lookup/table.h5): snow; ice; bite depths 3, 5, 9, 15 mm; passes 1, 2, " \
             "3." in page
+        cvf = page[page.index('id="coarse_vs_fine"'):].replace(' class="l"', "")
+        assert "Made by (as its files record):</p><pre>tools/compare_tables.py %s " % \
+            os.path.join(tmp, "coarse.csv") in cvf, cvf[:600]
+        assert "peak |F| ratio 2.857, peak |T| ratio 2</div>" in cvf, cvf
+        assert "<tr><td>snow</td><td>2</td><td>1.938 (1.375 .. 2.5)</td><td>2.5 (2.5 .. 2.5)" \
+            "</td><td>2 (2 .. 2)</td><td>2 (2 .. 2)</td></tr>" in cvf, cvf
+        assert ("<tr><td>snow</td><td>5</td><td>1</td><td>both</td><td>4</td><td>10</td>"
+                "<td>7</td><td>2.5</td><td>2.857</td><td>2</td><td>2</td><td>1.375</td>"
+                "<td>2</td></tr>") in cvf, cvf
+        assert "<td>ice</td><td>15</td><td>2</td><td>both</td><td>11</td><td>20</td><td>20</td>" \
+            "<td>2.5</td><td>2.857 (ref.)</td>" in cvf, cvf
+        assert "<td>ice</td><td>3</td><td>1</td><td>coarse_only</td><td>0</td><td>4</td>" \
+            "<td>-</td><td>-</td>" in cvf, cvf
 
         # Again: nothing is redrawn (the figures are newer than their inputs), the same page.
         mtime = os.path.getmtime(os.path.join(root, "lookup", "lookup_fig9.png"))
@@ -240,7 +274,11 @@ def main():
         assert r.returncode == 0, r.stderr
         with open(os.path.join(empty, "report.html"), encoding="utf-8") as f:
             blank = f.read()
-        assert blank.count('class="notrun">Not run: ') == 5, blank
+        assert blank.count('class="notrun">Not run: ') == 6, blank
+        assert ("Not run: build/scoopsim sweep scenes/sweeps/lookup.yaml -o %s/lookup_fine "
+                "&amp;&amp; tools/compare_tables.py assets/lookup_coarse.csv "
+                "%s/lookup_fine/table.h5 "
+                % (empty, empty)) in blank, blank
         assert "Not run: build/scoopsim study shape scenes/paper/shape_study.yaml -o " + empty + \
             "/shape/shape.h5" in blank
         # The lookup sweep done but not drawn: only the drawing is not run.
@@ -269,6 +307,10 @@ def main():
         os.makedirs(os.path.join(bad_csv, "size"))
         with open(os.path.join(bad_csv, "size", "size_study.csv"), "w") as f:
             f.write("size_mm,beds\n2,1\n")
+        bad_cvf = os.path.join(tmp, "bad_cvf")
+        os.makedirs(os.path.join(bad_cvf, "lookup"))
+        with open(os.path.join(bad_cvf, "lookup", "coarse_vs_fine.csv"), "w") as f:
+            f.write("# tools/compare_tables.py a b\nmaterial,bite_depth_mm,pass\nsnow,5,1\n")
         bad_commands = os.path.join(tmp, "bad_commands")
         os.makedirs(bad_commands)
         with open(os.path.join(bad_commands, "commands.txt"), "w") as f:
@@ -276,13 +318,14 @@ def main():
         expect_refused(run, (([bad_commands], "commands.txt:2: expected `KEY: COMMAND`"),
                              ([bad_h5], "shape.h5"), ([bad_png], "testbed_sand.png"),
                              ([bad_csv], "missing column peak_force_mean"),
+                             ([bad_cvf], "coarse_vs_fine.csv: missing column material_id"),
                              ([os.path.join(tmp, "none")], "none: no such folder")))
     if widths is None:
         print("report_test: SKIPPED the Chromium check (no chromium: tools/install-deps.sh --test "
               "installs it); every other check passed")
         return 77
-    print("report_test: 9 figures embedded and rendered by headless Chromium, empty folder -> 5 "
-          "'not run' sections, 5 bad inputs refused")
+    print("report_test: 9 figures embedded and rendered by headless Chromium, empty folder -> 6 "
+          "'not run' sections, 6 bad inputs refused")
     return 0
 
 
