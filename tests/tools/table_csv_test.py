@@ -4,7 +4,8 @@ parses with Python's csv module into exactly the columns m,d,p,rho,Fx,Fy,Fz,Tx,T
 row reads back to the table's own values bit for bit (material id, bite depth [m], pass, rho [m],
 the l_scoop wrench [N, N m]); rows exist exactly where the table has data. The table is built by
 `scoopsim table build` from synthetic case files (no DEM), and `table query` at a grid node gives
-the CSV's row.
+the CSV's row; tools/compare_tables.py finds the CSV and the table.h5 the same table (every
+ratio 1, the same nodes).
 
     table_csv_test.py SCOOPSIM
 """
@@ -120,6 +121,24 @@ def main():
                              check=True, capture_output=True, text=True).stdout
         q = json.loads(out)
         assert np.array_equal(np.array(q["F"] + q["T"]), w), (q, w)
+
+        # tools/compare_tables.py reads the exported CSV and the table.h5 as the same table:
+        # each cell in both, the same nodes and rho_end, every ratio exactly 1 (the CSV's text
+        # reads back bit for bit, above), so its rule for where a table.h5 holds data is the
+        # exporter's.
+        compare = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools",
+                               "compare_tables.py")
+        cmp_csv = os.path.join(tmp, "csv_vs_h5.csv")
+        subprocess.run([sys.executable, compare, out_csv, table, "--csv", cmp_csv], check=True,
+                       capture_output=True)
+        with open(cmp_csv, newline="") as f:
+            cells = list(csv.DictReader(l for l in f if not l.startswith("#")))
+        assert len(cells) == len({(r[0], r[1], r[2]) for r in rows}), len(cells)
+        for c in cells:
+            assert c["status"] == "both" and c["nodes"] == c["nodes_coarse"] == c["nodes_fine"], c
+            assert c["rho_end_mm_coarse"] == c["rho_end_mm_fine"], c
+            assert all(float(c[k]) == 1.0 for k in ("mean_F_ratio", "peak_F_ratio",
+                                                    "mean_T_ratio", "peak_T_ratio")), c
     print("table_csv_test: ok")
 
 
