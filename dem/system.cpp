@@ -142,7 +142,12 @@ void System::RemoveParticles(const std::vector<int64_t>& requested) {
   }
 }
 
-void System::Touch() { ws_->stale.rebuild = true; }
+void System::Touch() {
+  ws_->stale.rebuild = true;
+  // The config's skins (a state restored under another neighbour config takes them here).
+  ws_->skin = config_.skin;
+  ws_->near_skin = std::max(0.0, config_.near_fraction * config_.skin);
+}
 
 NeighborStats System::neighbor_stats() const {
   const internal::Workspace& m = *ws_;

@@ -174,7 +174,7 @@ class System {
   const SystemConfig& config() const { return config_; }
   const Particles& particles() const { return p_; }
   Particles& mutable_particles() { return p_; }  // positions/velocities only; call Touch() after
-  void Touch();  // forces a neighbour-list rebuild before the next step
+  void Touch();  // forces a neighbour-list rebuild before the next step, with the config's skin
   // Rebuilds now: storage order and neighbour list become a function of positions and ids alone.
   // Call before saving and after loading a state, so that a restored run replays bit for bit.
   void Canonicalize() { Rebuild(); }

@@ -666,7 +666,13 @@ Command BenchStep(CLI::App* bench) {
   auto options = std::make_shared<sim::BenchStepOptions>();
   CLI::App* command = bench->add_subcommand(
       "step", "Time a scene's step from its saved bed, e.g. a mid-dig state (one JSON line)");
-  command->add_option("SCENE", options->scene, "Scene file (YAML) with a bed file")->required();
+  command->add_option("SCENE", options->scene, "Scene file (YAML) with a bed file");
+  command->add_option("--checkpoint", options->checkpoint,
+                      "A run's checkpoint (OUT.restart.h5) instead of SCENE: step on from it, "
+                      "under the scene it holds (a mid-dig state)");
+  command->add_option("--set", options->sets,
+                      "KEY=VALUE: override a scene key (repeatable); on a checkpoint the lists "
+                      "are made again from the changed scene before the first step");
   command->add_option("--warm", options->warm, "Steps run before the timing")
       ->capture_default_str()
       ->check(CLI::Range(int64_t{0}, int64_t{1000000000}));

@@ -494,10 +494,28 @@ struct BenchArm {
 };
 
 int BenchStep(const BenchStepOptions& options) {
-  const Scene scene = LoadScene(options.scene);
-  if (scene.bed.file.empty()) throw InputError(options.scene + ": bed.file: expected a saved bed");
+  if (options.checkpoint.empty() == options.scene.empty())
+    throw InputError("bench step: expected a SCENE or --checkpoint FILE (one of them)");
+  if (!options.checkpoint.empty() && !options.arm.empty())
+    throw InputError(options.checkpoint + ": bench step --arm: expected a SCENE, not a checkpoint");
+  std::unique_ptr<Checkpoint> checkpoint;
+  if (!options.checkpoint.empty())
+    checkpoint = std::make_unique<Checkpoint>(ReadCheckpoint(options.checkpoint));
+  const Scene scene =
+      checkpoint ? LoadSceneText(checkpoint->scene_path,
+                                 yaml_input::TextWithSets(checkpoint->scene_yaml, options.sets))
+                 : LoadScene(options.scene, options.sets);
+  if (!checkpoint && scene.bed.file.empty())
+    throw InputError(options.scene + ": bed.file: expected a saved bed");
   World world(scene, options.threads);
-  world.LoadState(scene.bed.file);
+  if (checkpoint) {
+    // No output: the steps write nothing (World::Step without one).
+    world.ResumeFrom(*checkpoint, MakeScoopDriver(scene, /*announce=*/false), options.checkpoint);
+    checkpoint.reset();  // the state's bytes, no longer needed
+    if (!options.sets.empty()) world.mutable_system().Touch();  // lists of the changed scene
+  } else {
+    world.LoadState(scene.bed.file);
+  }
   const dem::System* system = &world.system();
   std::unique_ptr<BenchArm> bench_arm;
   if (!options.arm.empty())
@@ -536,12 +554,15 @@ int BenchStep(const BenchStepOptions& options) {
   std::printf(
       "{\"bench\":\"step\",\"particles\":%zu,\"awake_per_step\":%.0f,\"steps\":%lld,"
       "\"threads\":%d,\"wall_s\":%.4f,\"ms_per_step\":%.4f,\"awake_particle_steps_per_s\":%.4g,"
-      "\"neighbor_builds\":%lld,\"near_builds\":%lld,%s,%s\"peak_rss_mb\":%.1f,"
+      "\"neighbor_builds\":%lld,\"near_builds\":%lld,\"near_pairs\":%lld,\"contacts\":%lld,%s,%s"
+      "\"peak_rss_mb\":%.1f,"
       "\"state_hash\":\"%016llx\"}\n",
       system->particles().size(), awake / steps, static_cast<long long>(options.steps),
       system->num_threads(), wall, 1e3 * wall / steps, awake / wall,
       static_cast<long long>(ns.builds - before.builds),
-      static_cast<long long>(ns.near_builds - before.near_builds), phases.c_str(), arm_json.c_str(),
+      static_cast<long long>(ns.near_builds - before.near_builds),
+      static_cast<long long>(ns.near_pairs), static_cast<long long>(ns.contacts), phases.c_str(),
+      arm_json.c_str(),
       PeakRssMb(), static_cast<unsigned long long>(system->StateHash()));
   return 0;
 }

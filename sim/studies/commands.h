@@ -160,6 +160,12 @@ int BenchSettle(const BenchSettleOptions& options);
 
 struct BenchStepOptions {
   std::string scene;   // a scene with a bed file (its sleep state, when saved, is restored)
+  // Or a run's checkpoint (OUT.restart.h5): the dig goes on from it, under the scene it holds
+  // (a real mid-dig state: the scoop in the bed, its contacts' history, the sleepers asleep).
+  std::string checkpoint;
+  // --set KEY=VALUE lines on the scene (the checkpoint's too: its lists are then made again from
+  // the changed scene before the first step, e.g. another neighbor.skin on the same state).
+  std::vector<std::string> sets;
   int64_t warm = 400;  // steps run before the timing (sleep checks settle, a rebuild or two)
   int64_t steps = 1500;
   int threads = 0;

@@ -330,6 +330,69 @@ TEST(CheckpointTest, ResumedWithMorePassesEqualsTheRunPlannedWithThem) {
   EXPECT_EQ(sim::SavedRun(out).Scoop().pass.back(), 2);
 }
 
+// `bench step --checkpoint R` steps the dig on from R (a mid-dig state: the scoop in the bed, the
+// sleepers asleep) under the scene R holds. Oracle: the uninterrupted run. Stepped past the dig's
+// end (World::Step does nothing then), the bench's state hash is the run's final one, on 1 and 2
+// threads. --set takes on the checkpoint (its lists made again from the changed scene: a wider
+// neighbor.skin gives more near pairs). Given both SCENE and --checkpoint, or neither: one line,
+// exit 2.
+TEST(CheckpointTest, BenchStepGoesOnFromACheckpoint) {
+  const std::string scene = WriteScene("dig");  // two passes of ~1.05 s each
+  const std::string reference = (TempDir() / "bench_reference.h5").string();
+  const std::string out = (TempDir() / "bench.h5").string();
+  const std::string log = (TempDir() / "bench.log").string();
+  ASSERT_EQ(scoopsim_test::RunScoopsim("run " + scene + " -o " + reference + " --threads 1 -q",
+                                       log),
+            0)
+      << ReadText(log);
+  ASSERT_EQ(scoopsim_test::RunScoopsim("run " + scene + " -o " + out +
+                                           " --threads 1 -q --checkpoint-every 0.02 "
+                                           "--stop-after 0.5",
+                                       log),
+            0)
+      << ReadText(log);
+  const std::string restart = (TempDir() / "bench.restart.h5").string();
+  ASSERT_TRUE(fs::exists(restart));
+  const std::string hash = StateHash(reference);
+  ASSERT_EQ(hash.size(), 16u);
+  auto json_of = [&](const std::string& args) {
+    const std::string json = (TempDir() / "bench.json").string();
+    EXPECT_EQ(scoopsim_test::RunScoopsim("bench step --checkpoint " + restart + args + " > " + json,
+                                         log),
+              0)
+        << ReadText(log);
+    return ReadText(json);
+  };
+  auto field = [](const std::string& json, const std::string& key) {
+    const size_t at = json.find("\"" + key + "\":");
+    return at == std::string::npos ? std::string()
+                                   : json.substr(at, json.find_first_of(",}", at) - at);
+  };
+  std::string near_pairs;
+  for (int threads : {1, 2}) {
+    const std::string json =
+        json_of(" --warm 0 --steps 400000 --threads " + std::to_string(threads));
+    EXPECT_EQ(field(json, "state_hash"), "\"state_hash\":\"" + hash + "\"") << json;
+    near_pairs = field(json, "near_pairs");
+  }
+  // The near pairs at the last near-list build: the scene's skin, then a wider one.
+  const std::string short_run = json_of(" --warm 0 --steps 200 --threads 1");
+  const std::string wider = json_of(" --warm 0 --steps 200 --threads 1 --set neighbor.skin=8e-3");
+  const auto count = [&](const std::string& json) {
+    const std::string f = field(json, "near_pairs");
+    return f.empty() ? -1L : std::stol(f.substr(f.find(':') + 1));
+  };
+  EXPECT_GT(count(short_run), 0) << short_run;
+  EXPECT_GT(count(wider), count(short_run)) << wider;
+  // SCENE and --checkpoint, or neither.
+  EXPECT_EQ(scoopsim_test::RunScoopsim("bench step " + scene + " --checkpoint " + restart, log), 2);
+  EXPECT_EQ(ReadText(log),
+            "scoopsim: bench step: expected a SCENE or --checkpoint FILE (one of them)\n");
+  EXPECT_EQ(scoopsim_test::RunScoopsim("bench step", log), 2);
+  EXPECT_EQ(ReadText(log),
+            "scoopsim: bench step: expected a SCENE or --checkpoint FILE (one of them)\n");
+}
+
 // A checkpoint is refused with one line, exit 2, when the scene given is not the one it was made
 // from, or when its format version is another.
 TEST(CheckpointTest, MismatchIsRefused) {
