@@ -338,7 +338,18 @@ int RunCommand(const RunArgs& args) {
   // (RunScene takes only more dig.passes: `--resume OUT --set dig.passes=N`).
   sim::Scene scene = !args.scene.empty() ? sim::LoadScene(args.scene, args.sets) : [&] {
     const sim::Checkpoint c = sim::ReadCheckpoint(sim::CheckpointPath(args.resume));
-    return sim::LoadSceneText(c.scene_path, sim::yaml_input::TextWithSets(c.scene_yaml, args.sets));
+    // A --set the checkpoint's text already ends its key with (the same dig.passes=N given again
+    // when a resumed run is resumed once more) is not added a second time.
+    const std::vector<std::string> held = sim::yaml_input::SetsOf(c.scene_yaml);
+    std::vector<std::string> sets;
+    for (const std::string& set : args.sets) {
+      const std::string key = set.substr(0, set.find('='));
+      std::string last;
+      for (const std::string& h : held)
+        if (h.substr(0, h.find('=')) == key) last = h;
+      if (last != set) sets.push_back(set);
+    }
+    return sim::LoadSceneText(c.scene_path, sim::yaml_input::TextWithSets(c.scene_yaml, sets));
   }();
   sim::Preflight(&scene, sim::Work::kRun);
   PrintWarnings(scene);
