@@ -140,6 +140,35 @@ Handle GroupGcpl(unsigned links) {
   return gcpl;
 }
 
+void LinkWhenWritten(hid_t file, hid_t object, const std::string& path) {
+  CheckOk(H5Fflush(file, H5F_SCOPE_LOCAL), "H5Fflush before linking " + path);
+  CheckOk(H5Olink(object, file, path.c_str(), H5P_DEFAULT, H5P_DEFAULT), "H5Olink " + path);
+}
+
+std::string ParentOf(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos || slash == 0 ? std::string("/") : path.substr(0, slash);
+}
+
+void MakeGroups(hid_t file, const std::string& path, unsigned links) {
+  // Each prefix in turn ("/a", "/a/b", ...): its parent exists by then.
+  for (size_t at = path.find('/', 1); ; at = path.find('/', at + 1)) {
+    const std::string prefix = path.substr(0, at);
+    if (!prefix.empty() && prefix != "/") {
+      const htri_t exists = H5Lexists(file, prefix.c_str(), H5P_DEFAULT);
+      CheckOk(exists, "H5Lexists " + prefix);
+      if (exists == 0) {
+        const Handle gcpl = GroupGcpl(links);
+        const Handle group(
+            CheckId(H5Gcreate_anon(file, gcpl.get(), H5P_DEFAULT), "H5Gcreate_anon " + prefix),
+            H5Gclose);
+        LinkWhenWritten(file, group.get(), prefix);
+      }
+    }
+    if (at == std::string::npos) break;
+  }
+}
+
 namespace {
 
 // Replaces attribute `name` of `object` with a scalar of `file_type` read from `value`.
@@ -298,10 +327,7 @@ std::string SnapshotGroupName(int64_t index) {
 
 void MakeSnapshotsGroup(hid_t file, int64_t capacity) {
   if (H5Lexists(file, "/snapshots", H5P_DEFAULT) > 0) return;
-  const Handle gcpl = GroupGcpl(static_cast<unsigned>(std::min<int64_t>(capacity, 65535)));
-  const Handle group(CheckId(H5Gcreate2(file, "/snapshots", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
-                             "H5Gcreate2 /snapshots"),
-                     H5Gclose);
+  MakeGroups(file, "/snapshots", static_cast<unsigned>(std::min<int64_t>(capacity, 65535)));
 }
 
 int64_t SnapshotsCapacity(hid_t file) {
@@ -317,18 +343,17 @@ int64_t SnapshotsCapacity(hid_t file) {
   return links;
 }
 
-SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
-                                    const dem::Particles& p) {
+Handle MakeParticleSnapshot(hid_t file, int64_t index, double time, const dem::Particles& p,
+                            SnapshotEntry* made) {
   const size_t n = p.size();
   if (p.x.size() != n || p.v.size() != n || p.w.size() != n || p.radius.size() != n ||
       p.material.size() != n) {
     throw std::invalid_argument("WriteParticleSnapshot: particle arrays differ in length");
   }
-  SnapshotEntry entry{SnapshotGroupName(index), time, static_cast<int64_t>(n), {}};
-  const Handle lcpl = IntermediateGroupsLcpl();
+  SnapshotEntry& entry = *made;
+  entry = SnapshotEntry{SnapshotGroupName(index), time, static_cast<int64_t>(n), {}};
   const Handle gcpl = GroupGcpl(kSnapshotLinks);
-  Handle group(CheckId(H5Gcreate2(file, entry.group.c_str(), lcpl.get(), gcpl.get(), H5P_DEFAULT),
-                       "H5Gcreate2 " + entry.group),
+  Handle group(CheckId(H5Gcreate_anon(file, gcpl.get(), H5P_DEFAULT), "H5Gcreate_anon " + entry.group),
                H5Gclose);
   WriteDoubleAttribute(group.get(), "time", time);
 
@@ -367,6 +392,15 @@ SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
   const bool flagged = p.awake.size() == n;
   for (size_t k = 0; k < n; ++k) material[k] = !flagged || p.awake[order[k]] != 0;
   WriteArray(group.get(), "awake", H5T_STD_I32LE, H5T_NATIVE_INT32, material.data(), n, 1);
+  return group;
+}
+
+SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
+                                    const dem::Particles& p) {
+  SnapshotEntry entry;
+  const Handle group = MakeParticleSnapshot(file, index, time, p, &entry);
+  MakeGroups(file, ParentOf(entry.group), kGroupLinks);
+  LinkWhenWritten(file, group.get(), entry.group);
   return entry;
 }
 
@@ -547,11 +581,9 @@ struct H5Output::Impl {
             h5::CheckId(H5Gopen2(file.get(), group.c_str(), H5P_DEFAULT), "H5Gopen2 " + group),
             H5Gclose);
       } else {
-        const h5::Handle lcpl = h5::IntermediateGroupsLcpl();
-        const h5::Handle gcpl = h5::GroupGcpl(h5::kGroupLinks);
+        h5::MakeGroups(file.get(), group, h5::kGroupLinks);
         group_obj = h5::Handle(
-            h5::CheckId(H5Gcreate2(file.get(), group.c_str(), lcpl.get(), gcpl.get(), H5P_DEFAULT),
-                        "H5Gcreate2 " + group),
+            h5::CheckId(H5Gopen2(file.get(), group.c_str(), H5P_DEFAULT), "H5Gopen2 " + group),
             H5Gclose);
       }
     }
@@ -588,14 +620,13 @@ struct H5Output::Impl {
     h5::CheckOk(H5Pset_deflate(dcpl.get(), 4), "H5Pset_deflate");
     h5::CheckOk(H5Pset_chunk_opts(dcpl.get(), H5D_CHUNK_DONT_FILTER_PARTIAL_CHUNKS),
                 "H5Pset_chunk_opts");
-    h5::Handle lcpl(h5::CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
-    h5::CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1),
-                "H5Pset_create_intermediate_group");
+    // Made unlinked, its attributes written, then linked once on disk (h5::LinkWhenWritten).
+    h5::MakeGroups(file.get(), h5::ParentOf(name), h5::kGroupLinks);
     Series s;
     s.dataset = h5::Handle(
-        h5::CheckId(H5Dcreate2(file.get(), name.c_str(), bits ? H5T_STD_U64LE : H5T_IEEE_F64LE,
-                               space.get(), lcpl.get(), dcpl.get(), H5P_DEFAULT),
-                    "H5Dcreate2 " + name + " in " + path),
+        h5::CheckId(H5Dcreate_anon(file.get(), bits ? H5T_STD_U64LE : H5T_IEEE_F64LE, space.get(),
+                                   dcpl.get(), H5P_DEFAULT),
+                    "H5Dcreate_anon " + name + " in " + path),
         H5Dclose);
     s.width = width;
     s.bits = bits;
@@ -606,6 +637,7 @@ struct H5Output::Impl {
     }
     for (const auto& [attribute, value] : series_attributes[name])
       h5::WriteStringAttribute(s.dataset.get(), attribute, value);
+    h5::LinkWhenWritten(file.get(), s.dataset.get(), name);
     return series.emplace(name, std::move(s)).first->second;
   }
 
@@ -713,14 +745,13 @@ struct H5Output::Impl {
                                             static_cast<int64_t>(cursor.snapshot_time.size()));
       h5::MakeSnapshotsGroup(file.get(), snapshot_capacity);
     }
-    const h5::Handle lcpl = h5::IntermediateGroupsLcpl();
     const h5::Handle gcpl = h5::GroupGcpl(h5::kSnapshotLinks);
     for (size_t k = 0; k < cursor.snapshot_time.size(); ++k) {
       const std::string group_name = h5::SnapshotGroupName(static_cast<int64_t>(k));
       const int64_t count = cursor.snapshot_count[k];
-      const h5::Handle group(h5::CheckId(H5Gcreate2(file.get(), group_name.c_str(), lcpl.get(),
-                                                    gcpl.get(), H5P_DEFAULT),
-                                         "H5Gcreate2 " + group_name),
+      // Linked once whole (h5::LinkWhenWritten), as a run's own snapshots.
+      const h5::Handle group(h5::CheckId(H5Gcreate_anon(file.get(), gcpl.get(), H5P_DEFAULT),
+                                         "H5Gcreate_anon " + group_name),
                              H5Gclose);
       h5::WriteDoubleAttribute(group.get(), "time", cursor.snapshot_time[k]);
       for (const Field& f : fields) {
@@ -740,14 +771,17 @@ struct H5Output::Impl {
         }
       }
       h5::SnapshotEntry entry{group_name, cursor.snapshot_time[k], count, {}};
-      entry.meshes = CopyMeshes(in, group_name);
+      entry.meshes = CopyMeshes(in, group_name, group.get());
+      h5::MakeGroups(file.get(), "/snapshots", h5::kGroupLinks);
+      h5::LinkWhenWritten(file.get(), group.get(), group_name);
       snapshots.push_back(std::move(entry));
     }
   }
 
   // The meshes of snapshot `group` in the file read by `in` (sim/files/internal_h5.h,
-  // WriteSnapshotMeshes), copied into this file as they are.
-  std::vector<h5::MeshEntry> CopyMeshes(const h5::Reader& in, const std::string& group) {
+  // WriteSnapshotMeshes), copied as they are into `into`, its copy (not yet linked).
+  std::vector<h5::MeshEntry> CopyMeshes(const h5::Reader& in, const std::string& group,
+                                        hid_t into) {
     std::vector<h5::MeshEntry> entries;
     for (const char* role : {"scoop", "arm", "obstacles"}) {
       const std::string at = group + "/meshes/" + role;
@@ -760,8 +794,9 @@ struct H5Output::Impl {
       const auto pose = in.Read<double>(at + "/pose", H5T_FLOAT, H5T_NATIVE_DOUBLE, -1, 7, &parts);
       const h5::Handle lcpl = h5::IntermediateGroupsLcpl();
       const h5::Handle gcpl = h5::GroupGcpl(h5::kGroupLinks);
+      const std::string relative = std::string("meshes/") + role;
       const h5::Handle g(
-          h5::CheckId(H5Gcreate2(file.get(), at.c_str(), lcpl.get(), gcpl.get(), H5P_DEFAULT),
+          h5::CheckId(H5Gcreate2(into, relative.c_str(), lcpl.get(), gcpl.get(), H5P_DEFAULT),
                       "H5Gcreate2 " + at),
           H5Gclose);
       const hsize_t hv = static_cast<hsize_t>(v), ht = static_cast<hsize_t>(t);
@@ -1070,15 +1105,16 @@ void H5Output::WriteTable(const std::string& dataset, const std::vector<TableCol
     }
     const hsize_t dims[1] = {static_cast<hsize_t>(rows)};
     h5::Handle space(h5::CheckId(H5Screate_simple(1, dims, nullptr), "H5Screate_simple"), H5Sclose);
-    const h5::Handle lcpl = h5::IntermediateGroupsLcpl();
-    h5::Handle d(h5::CheckId(H5Dcreate2(m.file.get(), name.c_str(), type.get(), space.get(),
-                                        lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
-                             "H5Dcreate2 " + name + " in " + m.path),
+    h5::MakeGroups(m.file.get(), h5::ParentOf(name), h5::kGroupLinks);
+    h5::Handle d(h5::CheckId(H5Dcreate_anon(m.file.get(), type.get(), space.get(), H5P_DEFAULT,
+                                            H5P_DEFAULT),
+                             "H5Dcreate_anon " + name + " in " + m.path),
                  H5Dclose);
     if (rows > 0) {
       h5::CheckOk(H5Dwrite(d.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()),
                   "H5Dwrite " + name + " in " + m.path);
     }
+    h5::LinkWhenWritten(m.file.get(), d.get(), name);
   });
 }
 
@@ -1090,8 +1126,12 @@ void H5Output::WriteSnapshot(double time, const dem::Particles& particles,
   m.Write([&] {
     if (index == 0 && m.snapshot_capacity == 0) m.snapshot_capacity = kDefaultSnapshotCapacity;
     h5::MakeSnapshotsGroup(m.file.get(), m.snapshot_capacity);
-    h5::SnapshotEntry entry = h5::WriteParticleSnapshot(m.file.get(), index, time, particles);
-    if (!meshes.empty()) entry.meshes = h5::WriteSnapshotMeshes(m.file.get(), entry.group, meshes);
+    // Made whole out of the tree, then linked (h5::LinkWhenWritten).
+    h5::SnapshotEntry entry;
+    const h5::Handle group =
+        h5::MakeParticleSnapshot(m.file.get(), index, time, particles, &entry);
+    if (!meshes.empty()) entry.meshes = h5::WriteSnapshotMeshes(group.get(), meshes);
+    h5::LinkWhenWritten(m.file.get(), group.get(), entry.group);
     m.snapshots.push_back(std::move(entry));
   });
   Flush();

@@ -73,6 +73,21 @@ Handle CreateFile(const std::string& path, bool swmr, bool* got_swmr, const std:
 // Link-creation properties that create missing intermediate groups ("/series/scoop/force").
 Handle IntermediateGroupsLcpl();
 
+// Objects made while a run writes its file are made anonymous (H5Gcreate_anon, H5Dcreate_anon),
+// filled, written to disk, and only then linked into the tree. HDF5 writes a new object's header
+// and the parent's new link in one flush, in no set order; a kill between the two left a link to
+// a header never written, which plain readers cannot follow (h5dump stops at it, h5py too when
+// it is early in the tree; RunOutputTest caught one in CI). LinkWhenWritten flushes the file
+// (the object's headers, its data and everything linked into it reach the disk), then links it
+// at `path`: one rewrite of the parent's header (GroupGcpl), so a kill leaves either no trace of
+// the object in the tree or all of it.
+void LinkWhenWritten(hid_t file, hid_t object, const std::string& path);
+// Makes each missing group of the absolute `path` (and `path` itself) that way, room for `links`
+// links in each (GroupGcpl).
+void MakeGroups(hid_t file, const std::string& path, unsigned links);
+// The absolute path of the group that holds `path` ("/" for "/a").
+std::string ParentOf(const std::string& path);
+
 // Group-creation properties for a group that will hold up to `links` links. HDF5 keeps up to 8
 // links in a group's object header and at the 9th moves them to "dense" storage (a fractal heap
 // and a name-index B-tree). Adding a link to a dense group rewrites the B-tree's header and a node
@@ -158,14 +173,19 @@ void MakeSnapshotsGroup(hid_t file, int64_t capacity);
 // The room /snapshots of `file` was made with (its estimated link count); 0 without one.
 int64_t SnapshotsCapacity(hid_t file);
 
-// Writes group /snapshots/NNNNNN (attribute time; datasets id int64 (N), position, velocity,
+// Makes snapshot `index`, not yet linked (LinkWhenWritten it at the entry's group,
+// /snapshots/NNNNNN, once whole): attribute time; datasets id int64 (N), position, velocity,
 // angular_velocity (N x 3) [SI], radius (N), material int32 (N), speed |v| (N), connectivity
 // int64 0..N-1 (N), all in persistent-id order. This is the one writer of particle arrays: the
 // bed file hard-links its /particles datasets to the snapshot's.
+Handle MakeParticleSnapshot(hid_t file, int64_t index, double time, const dem::Particles& particles,
+                            SnapshotEntry* entry);
+// MakeParticleSnapshot, then linked at its group (made first, with /snapshots if missing).
 SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
                                     const dem::Particles& particles);
 
-// Writes the meshes of a snapshot under <group>/meshes/<name>, one group per role (in the order
+// Writes the meshes of a snapshot under meshes/<name> of the snapshot's `group` (open, not yet
+// linked: MakeParticleSnapshot), one group per role (in the order
 // the roles first appear in `meshes`), each the role's parts together in world coordinates:
 //   points (V x 3) [m], triangles int64 (T x 3) (indices into points, counter-clockwise seen from
 //   outside as the part's mesh), part int32 (T) (the part, 0.., in `meshes` order), pose
@@ -173,8 +193,7 @@ SnapshotEntry WriteParticleSnapshot(hid_t file, int64_t index, double time,
 //   are its body-frame vertices moved by its pose.
 // Meshes given as null are skipped. Written in the snapshot's own group
 // (sim/files/snapshot_meshes.cpp).
-std::vector<MeshEntry> WriteSnapshotMeshes(hid_t file, const std::string& group,
-                                           const std::vector<MeshView>& meshes);
+std::vector<MeshEntry> WriteSnapshotMeshes(hid_t group, const std::vector<MeshView>& meshes);
 // The XDMF3 grids of the snapshots' meshes: per mesh name a temporal collection of Triangle grids
 // (geometry `points`, cell attribute `part`), written into the sidecar's domain.
 std::string MeshGridsXdmf(const std::string& h5_file_name,

@@ -11,8 +11,7 @@
 
 namespace sim::h5 {
 
-std::vector<MeshEntry> WriteSnapshotMeshes(hid_t file, const std::string& group,
-                                           const std::vector<MeshView>& meshes) {
+std::vector<MeshEntry> WriteSnapshotMeshes(hid_t group, const std::vector<MeshView>& meshes) {
   // The roles in order of first appearance.
   std::vector<MeshRole> roles;
   for (const MeshView& m : meshes) {
@@ -44,10 +43,11 @@ std::vector<MeshEntry> WriteSnapshotMeshes(hid_t file, const std::string& group,
     }
     MeshEntry entry{MeshRoleName(role), static_cast<int64_t>(points.size() / 3),
                     static_cast<int64_t>(part.size())};
-    const std::string name = group + "/meshes/" + entry.name;
+    // Relative to the snapshot's group, which is not in the tree yet (LinkWhenWritten).
+    const std::string name = "meshes/" + entry.name;
     Handle lcpl(CheckId(H5Pcreate(H5P_LINK_CREATE), "H5Pcreate"), H5Pclose);
     CheckOk(H5Pset_create_intermediate_group(lcpl.get(), 1), "H5Pset_create_intermediate_group");
-    Handle g(CheckId(H5Gcreate2(file, name.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+    Handle g(CheckId(H5Gcreate2(group, name.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
                      "H5Gcreate2 " + name),
              H5Gclose);
     const hsize_t v = static_cast<hsize_t>(entry.points), t = static_cast<hsize_t>(entry.triangles);

@@ -438,11 +438,13 @@ TEST_F(RunOutputTest, StoppedPourIsKeptAndGoesOn) {
 }
 
 // A run killed just before any one of its writes (the driver's test hook) leaves a file whose
-// every snapshot reads in full with h5ls (a separate process: HDF5's reader crashed on such files).
-// Before 2026-12-04 /snapshots went to HDF5's dense link storage at its 9th snapshot, and a kill
-// between the rewrites of its B-tree's header and node (2 of about every 44 writes from then on)
-// left its list unreadable. 60 spheres, a snapshot every step: 28 snapshots, about 770 writes,
-// of which every 7th is tried.
+// every snapshot reads in full with h5ls (a separate process: HDF5's reader crashed on such files)
+// and that h5dump reads whole. Before 2026-12-04 /snapshots went to HDF5's dense link storage at
+// its 9th snapshot, and a kill between the rewrites of its B-tree's header and node (2 of about
+// every 44 writes from then on) left its list unreadable; before 2026-12-06 a new snapshot or
+// series was linked in the same flush that wrote its header, and a kill between the two left a
+// link h5dump could not follow. 60 spheres, a snapshot every step: 28 snapshots; every 7th
+// write is tried.
 TEST(KilledOutputTest, KilledBeforeAnyWriteLeavesEverySnapshotReadable) {
   if (std::system("command -v h5ls >/dev/null 2>&1") != 0) GTEST_SKIP() << "no h5ls (hdf5-tools)";
   const std::string source = SCOOPSIM_SOURCE_DIR;
@@ -488,8 +490,14 @@ output: {interval: 1.0e-3, snapshot_every: 1, flush_seconds: 0.01}
           line.find("/meshes") == std::string::npos)
         ++datasets;
     }
-    // Each snapshot 9 datasets; one being written when killed may be short of them.
-    EXPECT_GE(datasets, 9 * (groups - 1)) << "killed before write " << k << ":\n" << text;
+    // Each snapshot 9 datasets: one is linked only once whole (h5::LinkWhenWritten).
+    EXPECT_EQ(datasets, 9 * groups) << "killed before write " << k << ":\n" << text;
+    // And every object, its data and attributes read with h5dump: no link to a header never
+    // written (a snapshot's or a series', linked before it reached the disk, until 2026-12-06).
+    if (std::system("command -v h5dump >/dev/null 2>&1") == 0) {
+      const std::string h5dump = "h5dump " + out.string() + " >/dev/null 2>&1";
+      EXPECT_EQ(std::system(h5dump.c_str()), 0) << "killed before write " << k << ": h5dump";
+    }
     most_snapshots = std::max(most_snapshots, groups);
   }
   EXPECT_GT(killed, 50);
