@@ -218,6 +218,8 @@ struct Workspace {
                                   // the shear of a pair that did not is stale and reads as zero
   std::vector<Vec3> x_build;      // positions at the last build [m] (N)
   double drift_bound = 0;         // upper bound on any displacement since the last build [m]
+  int64_t partial_builds = 0;     // builds of a part of the list (RebuildPart) since the
+                                  // System was made or restored (not saved)
   // Whether each particle has been on the active list since the last build (N): only those
   // can have moved, so a sleeper that has not sits exactly at x_build.
   std::vector<uint8_t> moved;

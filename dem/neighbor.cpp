@@ -7,8 +7,9 @@
 
 namespace dem {
 
-void NeighborList::SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n) {
-  lo_ = lo;
+NeighborList::Grid NeighborList::MakeGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n) {
+  Grid g;
+  g.lo = lo;
   double cell = cutoff;
   const double ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
   int cells[3];
@@ -28,24 +29,36 @@ void NeighborList::SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size
   double width = ext[0] / cells[0];
   for (int a = 1; a < 3; ++a) width = std::min(width, ext[a] / cells[a]);
   width = std::max(width, cell);
-  inv_cell_ = 1.0 / width;
+  g.inv_cell = 1.0 / width;
   // Slab axis: the one with most cells, so that there are many slabs to share between threads.
   int order[3] = {0, 1, 2};
   std::stable_sort(order, order + 3, [&](int a, int b) { return cells[a] > cells[b]; });
-  for (int g = 0; g < 3; ++g) {
-    axis_[g] = order[g];
-    n_[g] = std::max(1, static_cast<int>(std::floor(ext[order[g]] * inv_cell_)));
+  for (int k = 0; k < 3; ++k) {
+    g.axis[k] = order[k];
+    g.n[k] = std::max(1, static_cast<int>(std::floor(ext[order[k]] * g.inv_cell)));
+  }
+  return g;
+}
+
+void NeighborList::SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n) {
+  const Grid g = MakeGrid(lo, hi, cutoff, n);
+  lo_ = g.lo;
+  inv_cell_ = g.inv_cell;
+  for (int k = 0; k < 3; ++k) {
+    n_[k] = g.n[k];
+    axis_[k] = g.axis[k];
   }
   // Two halves per slab (awake first, then asleep: see ComputeOrder).
   cell_start_.assign(2 * static_cast<size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
   count_.assign(cell_start_.size() - 1, 0);
 }
 
-int NeighborList::CellAlong(int g, const Vec3& x) const {
-  // Clamp: particles outside the grid share its boundary cells (still correct, only slower).
-  const double u = (x[axis_[g]] - lo_[axis_[g]]) * inv_cell_;
-  const int k = std::isfinite(u) ? static_cast<int>(std::floor(std::clamp(u, -1.0, 1e9))) : 0;
-  return std::clamp(k, 0, n_[g] - 1);
+bool NeighborList::SameGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n) const {
+  if (cell_start_.empty() || slab_start.size() != static_cast<size_t>(n_[0]) + 1) return false;
+  const Grid g = MakeGrid(lo, hi, cutoff, n);
+  bool same = g.lo.x == lo_.x && g.lo.y == lo_.y && g.lo.z == lo_.z && g.inv_cell == inv_cell_;
+  for (int k = 0; k < 3; ++k) same = same && g.n[k] == n_[k] && g.axis[k] == axis_[k];
+  return same;
 }
 
 int64_t NeighborList::CellKey(const Vec3& x, int c[3]) const {
@@ -60,8 +73,7 @@ void NeighborList::SlabSpan(const Vec3& lo, const Vec3& hi, int* first, int* las
 }
 
 void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit,
-                                std::vector<int32_t>* perm, int num_threads,
-                                const uint8_t* awake) {
+                                std::vector<int32_t>* perm, int num_threads, const uint8_t* awake) {
   const int64_t n = static_cast<int64_t>(visit.size());
   const int64_t per_slab = static_cast<int64_t>(n_[1]) * n_[2];
   std::vector<int64_t> key(n);
@@ -89,8 +101,40 @@ void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit
   for (int s = 0; s <= n_[0]; ++s) slab_start[s] = cell_start_[2 * s * per_slab];
 }
 
-void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double skin,
-                         int num_threads, const int32_t* group) {
+bool NeighborList::ComputeOrderSlabs(const Vec3* x, const std::vector<int32_t>& visit, int s0,
+                                     int s1, int32_t* perm, const uint8_t* awake) {
+  const int64_t per_slab = static_cast<int64_t>(n_[1]) * n_[2];
+  const int64_t key_lo = 2 * s0 * per_slab, key_hi = 2 * (s1 + 1) * per_slab;
+  const int32_t base = slab_start[s0];
+  if (static_cast<int64_t>(visit.size()) != slab_start[s1 + 1] - base) return false;
+  std::vector<int64_t>& key = key_;
+  key.resize(visit.size());
+  for (size_t i = 0; i < visit.size(); ++i) {
+    int c[3];
+    const int64_t cell = CellKey(x[visit[i]], c);
+    const int64_t half = awake != nullptr && !awake[visit[i]] ? 1 : 0;
+    key[i] = (2 * c[0] + half) * per_slab + (cell - c[0] * per_slab);
+    if (key[i] < key_lo || key[i] >= key_hi) return false;  // left the slabs: a full build
+  }
+  // Counting sort of the slabs' keys (the others keep their counts and starts), stable in visit
+  // order: the order ComputeOrder gives these particles. (count_ is scratch: a restored list
+  // has none.)
+  count_.resize(cell_start_.size() - 1);
+  std::fill(count_.begin() + key_lo, count_.begin() + key_hi, 0);
+  for (const int64_t k : key) ++count_[k];
+  int32_t sum = base;
+  for (int64_t k = key_lo; k < key_hi; ++k) {
+    cell_start_[k] = sum;
+    sum += count_[k];
+  }
+  std::vector<int32_t> fill(cell_start_.begin() + key_lo, cell_start_.begin() + key_hi);
+  for (size_t i = 0; i < visit.size(); ++i) perm[fill[key[i] - key_lo]++ - base] = visit[i];
+  for (int s = s0 + 1; s <= s1; ++s) slab_start[s] = cell_start_[2 * s * per_slab];
+  return true;
+}
+
+void NeighborList::BuildSlabs(const Vec3* x, const double* radius, double skin, int num_threads,
+                              const int32_t* group, int slab_first, int slab_last) {
   const int num_slabs = n_[0];
   const int n1 = n_[1], n2 = n_[2];
   slab_partner_.resize(num_slabs);
@@ -108,15 +152,15 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
   };
   constexpr int kOwnHalf = -1;
   static constexpr RunSpec kRuns[11] = {
-      {0, kOwnHalf, 0, 0}, {0, kOwnHalf, 1, -1},                   // own half, later cells
-      {0, 1, -1, -1},      {0, 1, 0, -1},        {0, 1, 1, -1},    // own slab's asleep half
-      {1, 0, -1, -1},      {1, 0, 0, -1},        {1, 0, 1, -1},    // next slab, awake half
+      {0, kOwnHalf, 0, 0}, {0, kOwnHalf, 1, -1},                  // own half, later cells
+      {0, 1, -1, -1},      {0, 1, 0, -1},        {0, 1, 1, -1},   // own slab's asleep half
+      {1, 0, -1, -1},      {1, 0, 0, -1},        {1, 0, 1, -1},   // next slab, awake half
       {1, 1, -1, -1},      {1, 1, 0, -1},        {1, 1, 1, -1}};  // next slab, asleep half
   const auto cell_of = [&](int slab, int half, int b, int c) {
     return ((static_cast<int64_t>(2 * slab + half)) * n1 + b) * n2 + c;
   };
 #pragma omp parallel for schedule(dynamic, 1) num_threads(num_threads)
-  for (int s = 0; s < num_slabs; ++s) {
+  for (int s = slab_first; s <= slab_last; ++s) {
     std::vector<int32_t>& out = slab_partner_[s];
     std::vector<int32_t>& cnt = slab_count_[s];
     cnt.clear();
@@ -162,6 +206,12 @@ void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double s
         }
     out.resize(used);
   }
+}
+
+void NeighborList::Build(const Vec3* x, const double* radius, size_t n, double skin,
+                         int num_threads, const int32_t* group) {
+  const int num_slabs = n_[0];
+  BuildSlabs(x, radius, skin, num_threads, group, 0, num_slabs - 1);
   // Concatenate the slabs in order (deterministic); each slab's part of the list starts at the
   // sum of the slabs before it.
   start.resize(n + 1);

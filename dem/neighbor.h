@@ -3,12 +3,14 @@
 //
 // Parallel, deterministic force accumulation rests on this layout: particles are sorted by slab
 // (one axis, the one with most cells, varying slowest; within a slab by cell, awake particles
-// first), and the cells are at least one cutoff wide. A pair (i, j > i) then has j in the slab of i or in the next one, so
-// processing even slabs in parallel and then odd slabs never writes one particle from two threads,
-// and the order in which forces add up is fixed by the data alone, whatever the thread count.
-// Public header of the dem module.
+// first), and the cells are at least one cutoff wide. A pair (i, j > i) then has j in the slab of i
+// or in the next one, so processing even slabs in parallel and then odd slabs never writes one
+// particle from two threads, and the order in which forces add up is fixed by the data alone,
+// whatever the thread count. Public header of the dem module.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -22,6 +24,14 @@ class NeighborList {
   // that must be found: 2 r_max + skin). Caps the cell count near 4 n + 4096 by widening cells.
   void SetupGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n);
 
+  // Whether SetupGrid(lo, hi, cutoff, n) would give the grid set up now (and ComputeOrder has
+  // placed particles on it): then the slabs that no particle entered or left since can keep
+  // their order and lists (ComputeOrderSlabs, BuildSlabs).
+  bool SameGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n) const;
+
+  // The slab a particle at x falls into (positions outside the grid: its boundary slabs).
+  int SlabOf(const Vec3& x) const { return CellAlong(0, x); }
+
   // Storage order for locality: perm[new_index] = old_index, sorted by slab, then (with `awake`,
   // one flag per particle) the awake particles before the sleeping ones, then by cell and, within
   // a cell, by the order in which `visit` lists the particles (pass them in persistent-id order
@@ -30,11 +40,29 @@ class NeighborList {
   void ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit, std::vector<int32_t>* perm,
                     int num_threads = 1, const uint8_t* awake = nullptr);
 
+  // ComputeOrder for the particles of slabs s0 .. s1 only, the others staying where they are:
+  // `visit` lists those slabs' particles (their storage indices, in persistent-id order), perm
+  // gets the new order of storage positions slab_start[s0] ... (perm[new - slab_start[s0]] =
+  // old), and the slabs' cell and slab starts are made again. The order is the one ComputeOrder
+  // would give them when every other particle keeps its sort key. Returns false, changing
+  // nothing, when some particle's key lies outside the slabs (then only a full order will do).
+  bool ComputeOrderSlabs(const Vec3* x, const std::vector<int32_t>& visit, int s0, int s1,
+                         int32_t* perm, const uint8_t* awake);
+
   // Builds the half list for particles already stored in the order ComputeOrder gave:
   // pairs (i, j > i) with |x_i - x_j| < r_i + r_j + skin. With `group` (n entries), pairs with
   // group[i] == group[j] >= 0 are left out (spheres of one rigid clump never touch).
   void Build(const Vec3* x, const double* radius, size_t n, double skin, int num_threads,
              const int32_t* group = nullptr);
+
+  // Build's first half, for slabs slab_first .. slab_last only: each slab's pairs into its own
+  // buffer (slab_pairs: the partners of its particles one after another, slab_counts: how many
+  // each has), which Build then joins into start and partner. The list of a slab depends on its
+  // particles and the next slab's only.
+  void BuildSlabs(const Vec3* x, const double* radius, double skin, int num_threads,
+                  const int32_t* group, int slab_first, int slab_last);
+  const std::vector<int32_t>& slab_pairs(int s) const { return slab_partner_[s]; }
+  const std::vector<int32_t>& slab_counts(int s) const { return slab_count_[s]; }
 
   // The slabs that hold every particle whose position at the last ComputeOrder lay in the box
   // [lo, hi]: first .. last (inclusive). Only the slab axis matters; positions outside the grid
@@ -63,7 +91,19 @@ class NeighborList {
   }
 
  private:
-  int CellAlong(int g, const Vec3& x) const;  // cell index along grid axis g, clamped
+  struct Grid {
+    Vec3 lo;
+    double inv_cell = 0;
+    int n[3] = {1, 1, 1}, axis[3] = {0, 1, 2};
+  };
+  static Grid MakeGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n);
+  // Cell index along grid axis g, clamped: particles outside the grid share its boundary cells
+  // (still correct, only slower).
+  int CellAlong(int g, const Vec3& x) const {
+    const double u = (x[axis_[g]] - lo_[axis_[g]]) * inv_cell_;
+    const int k = std::isfinite(u) ? static_cast<int>(std::floor(std::clamp(u, -1.0, 1e9))) : 0;
+    return std::clamp(k, 0, n_[g] - 1);
+  }
   int64_t CellKey(const Vec3& x, int c[3]) const;
 
   Vec3 lo_;
@@ -73,6 +113,7 @@ class NeighborList {
   std::vector<int32_t> cell_start_;  // first particle of each sort key (2 num_cells + 1):
                                      // (slab, awake then asleep half, second, third axis)
   std::vector<int32_t> count_;       // scratch (2 num_cells)
+  std::vector<int64_t> key_;         // scratch (ComputeOrderSlabs)
   std::vector<std::vector<int32_t>> slab_partner_;  // per-slab build buffers
   std::vector<std::vector<int32_t>> slab_count_;
 };

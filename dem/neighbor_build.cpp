@@ -24,6 +24,17 @@ void Permute(std::vector<T>& a, const std::vector<int32_t>& perm, std::vector<T>
   a.swap(scratch);
 }
 
+// Calls f(array, scratch) for each of the per-particle arrays (all in storage order), with a
+// scratch array of its type.
+template <typename F>
+void ForEachArray(Particles& p, Workspace& m, F f) {
+  f(p.id, m.scratch_i64);
+  for (auto* v : {&p.x, &p.v, &p.w, &p.f, &p.t}) f(*v, m.scratch_v);
+  for (auto* v : {&p.radius, &p.mass, &p.inv_mass, &p.inv_inertia}) f(*v, m.scratch_d);
+  f(p.material, m.scratch_i32);
+  f(p.awake, m.scratch_u8);
+}
+
 // Whether a particle at x with radius r is a candidate of the plane (closer than r + skin).
 inline bool NearPlane(const Vec3& x, double r, const Plane& plane, double skin) {
   return Dot(x - plane.point, plane.normal) < r + skin;
@@ -49,10 +60,16 @@ int64_t KeepOldList(Workspace& m, bool carry, int nt) {
   return n_old;
 }
 
-// 2. Grid sized for the present particles; storage reordered by cell, ties by persistent id. The
-// grid spans the particles' bounding box (within the domain), so that every slab holds particles
-// and the slabs share the work evenly.
-void SortStorage(Workspace& m, Particles& p, const SystemConfig& config, int64_t next_id, int nt) {
+// The box the cell grid spans and the cutoff it is made for: the particles' bounding box within
+// the domain (or the domain, for no box), so that every slab holds particles and the slabs share
+// the work evenly. While a scoop digs into a sleeping bed it often stays the same from one build
+// to the next: then only the slabs that particles entered or left are made again (RebuildPart).
+struct GridBox {
+  Vec3 lo, hi;
+  double cutoff = 0;  // 2 r_max + skin [m]
+};
+
+GridBox FindGridBox(const Workspace& m, const Particles& p, const SystemConfig& config, int nt) {
   const size_t n = p.size();
   double r_max = 0;
   double lox = config.domain_max.x, loy = config.domain_max.y, loz = config.domain_max.z;
@@ -75,15 +92,24 @@ void SortStorage(Workspace& m, Particles& p, const SystemConfig& config, int64_t
       hiz = std::max(hiz, xs[i].z);
     }
   }
-  Vec3 lo{std::max(lox, config.domain_min.x), std::max(loy, config.domain_min.y),
-          std::max(loz, config.domain_min.z)};
-  Vec3 hi{std::min(hix, config.domain_max.x), std::min(hiy, config.domain_max.y),
-          std::min(hiz, config.domain_max.z)};
-  if (!(hi.x > lo.x && hi.y > lo.y && hi.z > lo.z)) {
-    lo = config.domain_min;
-    hi = config.domain_max;
+  GridBox box;
+  box.cutoff = 2 * r_max + m.skin;
+  box.lo = {std::max(lox, config.domain_min.x), std::max(loy, config.domain_min.y),
+            std::max(loz, config.domain_min.z)};
+  box.hi = {std::min(hix, config.domain_max.x), std::min(hiy, config.domain_max.y),
+            std::min(hiz, config.domain_max.z)};
+  if (!(box.hi.x > box.lo.x && box.hi.y > box.lo.y && box.hi.z > box.lo.z)) {
+    box.lo = config.domain_min;
+    box.hi = config.domain_max;
   }
-  m.list.SetupGrid(lo, hi, 2 * r_max + m.skin, n);
+  return box;
+}
+
+// 2. Grid over `box`; storage reordered by cell, ties by persistent id.
+void SortStorage(Workspace& m, Particles& p, const SystemConfig& config, const GridBox& box,
+                 int64_t next_id, int nt) {
+  const size_t n = p.size();
+  m.list.SetupGrid(box.lo, box.hi, box.cutoff, n);
   m.index_of_id.assign(next_id, -1);
   for (size_t i = 0; i < n; ++i) m.index_of_id[p.id[i]] = static_cast<int32_t>(i);
   m.visit.clear();
@@ -91,18 +117,7 @@ void SortStorage(Workspace& m, Particles& p, const SystemConfig& config, int64_t
     if (m.index_of_id[id] >= 0) m.visit.push_back(m.index_of_id[id]);
   m.list.ComputeOrder(p.x.data(), m.visit, &m.perm, nt,
                       config.sleep.enabled ? p.awake.data() : nullptr);
-  Permute(p.id, m.perm, m.scratch_i64, nt);
-  Permute(p.x, m.perm, m.scratch_v, nt);
-  Permute(p.v, m.perm, m.scratch_v, nt);
-  Permute(p.w, m.perm, m.scratch_v, nt);
-  Permute(p.f, m.perm, m.scratch_v, nt);
-  Permute(p.t, m.perm, m.scratch_v, nt);
-  Permute(p.radius, m.perm, m.scratch_d, nt);
-  Permute(p.mass, m.perm, m.scratch_d, nt);
-  Permute(p.inv_mass, m.perm, m.scratch_d, nt);
-  Permute(p.inv_inertia, m.perm, m.scratch_d, nt);
-  Permute(p.material, m.perm, m.scratch_i32, nt);
-  Permute(p.awake, m.perm, m.scratch_u8, nt);
+  ForEachArray(p, m, [&](auto& a, auto& scratch) { Permute(a, m.perm, scratch, nt); });
   for (size_t i = 0; i < n; ++i) m.index_of_id[p.id[i]] = static_cast<int32_t>(i);
 }
 
@@ -271,28 +286,184 @@ void ApplyPending(Workspace& m, int64_t next_id) {
   m.pending.clear();
 }
 
+// Permute for positions [a, b) only (perm maps those into [a, b)).
+template <typename T>
+void PermuteRange(std::vector<T>& v, const int32_t* perm, int32_t a, int32_t b,
+                  std::vector<T>& scratch) {
+  scratch.resize(static_cast<size_t>(b - a));
+  for (int32_t i = a; i < b; ++i) scratch[i - a] = v[perm[i]];
+  std::copy(scratch.begin(), scratch.end(), v.begin() + a);
+}
+
+// Moves v's entries from `from` on by `delta` places (the array grows or shrinks by delta).
+template <typename T>
+void ShiftTail(std::vector<T>& v, size_t from, int64_t delta) {
+  const size_t old_size = v.size();
+  if (delta > 0) {
+    ResizeWithRoom(v, old_size + static_cast<size_t>(delta));
+    std::copy_backward(v.begin() + from, v.begin() + old_size, v.end());
+  } else if (delta < 0) {
+    std::copy(v.begin() + from, v.end(), v.begin() + (from + delta));
+    v.resize(old_size + delta);
+  }
+}
+
+// The build for a bed of which only a part moved (with sleeping, a dig: ~7% of the paper bed,
+// while a full build walks all of it). A particle that no step has moved since the last build
+// (Workspace::moved) sits where it was, with its sort key. So when the grid is the same
+// (FindGridBox), the slabs s0 .. s1 that hold every moved particle, before and after, are the
+// only ones whose order changes; their particles are sorted again among themselves, and the
+// list is made again for those slabs and the one before (whose pairs reach into s0). Every
+// other slab keeps its order, its pairs and their history; the pair arrays after the part are
+// shifted by the change in its pair count. The result is the full build's, bit for bit
+// (PartialRebuildTest): the same order, the same pairs in the same places, the same history (a
+// pair of two unmoved particles was never in a near list since the last build, so its history
+// is still as that build left it). Returns false, changing nothing, where it does not apply
+// (clumps, which move their sleepers; history to apply; another grid; most of the bed moved).
+bool RebuildPart(Workspace& m, Particles& p, const ClumpSet& clumps, const SystemConfig& config,
+                 const GridBox& box, int64_t next_id, int nt) {
+  const int64_t n = static_cast<int64_t>(p.size());
+  if (!config.partial_rebuild || !config.sleep.enabled || m.stale.list || m.stale.rebuild ||
+      !m.pending.empty() || !clumps.empty() || m.moved.size() != p.size() ||
+      m.x_build.size() != p.size() || m.list.start.size() != p.size() + 1 ||
+      m.index_of_id.size() != static_cast<size_t>(next_id) ||
+      !m.list.SameGrid(box.lo, box.hi, box.cutoff, p.size()))
+    return false;
+  // The slabs the moved particles were in at the build (their storage slab) or are in now.
+  const int ns = m.list.num_slabs();
+  const int32_t* slab_start = m.list.slab_start.data();
+  const uint8_t* moved = m.moved.data();
+  const Vec3* x = p.x.data();
+  int s0 = ns, s1 = -1;
+#pragma omp parallel for schedule(static) num_threads(nt) reduction(min : s0) reduction(max : s1)
+  for (int s = 0; s < ns; ++s)
+    for (int32_t i = slab_start[s]; i < slab_start[s + 1]; ++i)
+      if (moved[i]) {
+        const int now = m.list.SlabOf(x[i]);
+        s0 = std::min(s0, std::min(s, now));
+        s1 = std::max(s1, std::max(s, now));
+      }
+  if (s1 < s0) return false;
+  const int32_t a = slab_start[s0], b = slab_start[s1 + 1];
+  if (10 * static_cast<int64_t>(b - a) > 8 * n) return false;  // most of the bed: build it all
+  // The part's particles in persistent-id order, and their new order.
+  m.visit.clear();
+  const int32_t* index_of_id = m.index_of_id.data();
+  for (int64_t id = 0; id < next_id; ++id)
+    if (index_of_id[id] >= a && index_of_id[id] < b) m.visit.push_back(index_of_id[id]);
+  m.perm.resize(n);
+  if (!m.list.ComputeOrderSlabs(x, m.visit, s0, s1, m.perm.data() + a, p.awake.data()))
+    return false;
+  // From here on the build goes through. The near slots' history back into the list's arrays.
+  FlushNear(m, nt);
+  m.stale.list_history = false;
+  int32_t* perm = m.perm.data();
+  // perm over the whole storage (CarryPlaneHistory): the identity outside the part.
+  for (int64_t i = 0; i < a; ++i) perm[i] = static_cast<int32_t>(i);
+  for (int64_t i = b; i < n; ++i) perm[i] = static_cast<int32_t>(i);
+  ForEachArray(p, m, [&](auto& v, auto& scratch) { PermuteRange(v, perm, a, b, scratch); });
+  for (int32_t i = a; i < b; ++i) m.index_of_id[p.id[i]] = i;
+  m.new_of_old.resize(n);
+  int32_t* new_of_old = m.new_of_old.data();
+  for (int32_t i = a; i < b; ++i) new_of_old[perm[i]] = i;
+  FollowMeshHistory(m, next_id);
+
+  // The list of slabs L0 .. s1 made again: the old one kept (old_*, relative to its first pair
+  // P0), the new one built, the pairs after it shifted, the new one written in its place.
+  const int L0 = std::max(s0 - 1, 0);
+  const int32_t a_list = slab_start[L0];
+  std::vector<int32_t>& start = m.list.start;
+  std::vector<int32_t>& partner = m.list.partner;
+  const int32_t P0 = start[a_list], P1 = start[b];
+  m.old_start.resize(static_cast<size_t>(b - a_list) + 1);
+  for (int32_t i = a_list; i <= b; ++i) m.old_start[i - a_list] = start[i] - P0;
+  m.old_partner.assign(partner.begin() + P0, partner.begin() + P1);
+  m.old_shear.assign(m.shear.begin() + P0, m.shear.begin() + P1);
+  m.old_touching.assign(m.touching.begin() + P0, m.touching.begin() + P1);
+  m.list.BuildSlabs(p.x.data(), p.radius.data(), m.skin, nt, nullptr, L0, s1);
+  int64_t mid = 0;
+  for (int s = L0; s <= s1; ++s) mid += static_cast<int64_t>(m.list.slab_pairs(s).size());
+  const int64_t delta = mid - (P1 - P0);
+  ShiftTail(partner, static_cast<size_t>(P1), delta);
+  ShiftTail(m.shear, static_cast<size_t>(P1), delta);
+  ShiftTail(m.touching, static_cast<size_t>(P1), delta);
+  for (int64_t i = b; i <= n; ++i) start[i] += static_cast<int32_t>(delta);
+  {
+    int32_t at = P0;
+    for (int s = L0; s <= s1; ++s) {
+      const std::vector<int32_t>& pairs = m.list.slab_pairs(s);
+      const std::vector<int32_t>& counts = m.list.slab_counts(s);
+      std::copy(pairs.begin(), pairs.end(), partner.begin() + at);
+      for (int32_t i = slab_start[s]; i < slab_start[s + 1]; ++i) {
+        start[i] = at;
+        at += counts[i - slab_start[s]];
+      }
+    }
+  }
+  // The part's history: as CarryPairHistory carries it (both ends mapped through the part's
+  // permutation; outside it a particle keeps its index).
+  std::fill(m.shear.begin() + P0, m.shear.begin() + (P0 + mid), Vec3{});
+  std::fill(m.touching.begin() + P0, m.touching.begin() + (P0 + mid), uint8_t{0});
+  {
+    const auto new_of = [&](int32_t o) { return o >= a && o < b ? new_of_old[o] : o; };
+    const int32_t* o_start = m.old_start.data();
+    const int32_t* o_partner = m.old_partner.data();
+    const Vec3* o_shear = m.old_shear.data();
+    const uint8_t* o_touching = m.old_touching.data();
+    const int32_t* st = start.data();
+    const int32_t* pt = partner.data();
+    Vec3* shear = m.shear.data();
+    uint8_t* touching = m.touching.data();
+    const int64_t count = b - a_list;
+#pragma omp parallel for schedule(static) num_threads(nt)
+    for (int64_t r = 0; r < count; ++r)
+      for (int32_t q = o_start[r]; q < o_start[r + 1]; ++q) {
+        if (!(o_touching[q] && Norm2(o_shear[q]) > 0.0)) continue;
+        const int32_t ia = new_of(a_list + static_cast<int32_t>(r)), ib = new_of(o_partner[q]);
+        const int32_t owner = std::min(ia, ib), other = std::max(ia, ib);
+        for (int32_t k = st[owner]; k < st[owner + 1]; ++k)
+          if (pt[k] == other) {
+            shear[k] = owner == ia ? o_shear[q] : -o_shear[q];
+            touching[k] = 1;
+            break;
+          }
+      }
+  }
+  // The plane candidates, as the full build makes them (perm is the identity outside the part).
+  m.old_wall_start.swap(m.wall_start);
+  m.old_wall_k.swap(m.wall_k);
+  m.old_wall_shear.swap(m.wall_shear);
+  CountPlaneCandidates(m, p, config, nt);
+  CarryPlaneHistory(m, p, config, true, n, nt);
+  // The drift since the build: only the part's particles moved.
+  std::copy(p.x.begin() + a, p.x.begin() + b, m.x_build.begin() + a);
+  ++m.partial_builds;
+  return true;
+}
+
 }  // namespace
 
 void Rebuild(Workspace& m, Particles& p, ClumpSet& clumps, const SystemConfig& config,
              int64_t next_id, int nt) {
   const int64_t n = static_cast<int64_t>(p.size());
-  const bool carry = !m.stale.list;
-  const int64_t n_old = KeepOldList(m, carry, nt);
-  SortStorage(m, p, config, next_id, nt);
-  NoteAlike(m, p);
-  FollowMeshHistory(m, next_id);
-  // 3. Particle pairs and particle-plane candidates within reach (+ skin). With sleeping, the
-  // pairs of two sleepers stay listed (the force pass skips them and keeps their history), so
-  // that a particle that wakes needs no rebuild: its pairs are already there.
-  const int32_t* clump_of = clumps.Reindex(p, next_id);  // no pairs within a clump
-  m.list.Build(p.x.data(), p.radius.data(), p.size(), m.skin, nt, clump_of);
-  CountPlaneCandidates(m, p, config, nt);
-  CarryPairHistory(m, carry, n_old, n, nt);
-  CarryPlaneHistory(m, p, config, carry, n_old, nt);
-  ApplyPending(m, next_id);
-  // The drift since the build starts from here.
-  m.x_build.resize(n);
-  {
+  const GridBox box = FindGridBox(m, p, config, nt);
+  if (!RebuildPart(m, p, clumps, config, box, next_id, nt)) {
+    const bool carry = !m.stale.list;
+    const int64_t n_old = KeepOldList(m, carry, nt);
+    SortStorage(m, p, config, box, next_id, nt);
+    NoteAlike(m, p);
+    FollowMeshHistory(m, next_id);
+    // 3. Particle pairs and particle-plane candidates within reach (+ skin). With sleeping, the
+    // pairs of two sleepers stay listed (the force pass skips them and keeps their history), so
+    // that a particle that wakes needs no rebuild: its pairs are already there.
+    const int32_t* clump_of = clumps.Reindex(p, next_id);  // no pairs within a clump
+    m.list.Build(p.x.data(), p.radius.data(), p.size(), m.skin, nt, clump_of);
+    CountPlaneCandidates(m, p, config, nt);
+    CarryPairHistory(m, carry, n_old, n, nt);
+    CarryPlaneHistory(m, p, config, carry, n_old, nt);
+    ApplyPending(m, next_id);
+    // The drift since the build starts from here.
+    m.x_build.resize(n);
     const Vec3* x = p.x.data();
     Vec3* xb = m.x_build.data();
 #pragma omp parallel for schedule(static) num_threads(nt)

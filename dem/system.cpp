@@ -153,6 +153,7 @@ NeighborStats System::neighbor_stats() const {
   const internal::Workspace& m = *ws_;
   NeighborStats s;
   s.builds = builds_;
+  s.partial_builds = m.partial_builds;
   s.near_builds = m.near_builds;
   s.near_pairs = m.near_pairs;
   s.pairs = static_cast<int64_t>(m.list.num_pairs());

@@ -57,6 +57,10 @@ struct SystemConfig {
   // surfaces), made again when some particle may have moved half that. A pure saving: any value
   // > 0 gives bit-identical results (a larger one, the whole list).
   double near_fraction = 0.1;
+  // With sleeping, a neighbour-list build makes again only the slabs of the cell grid where
+  // particles moved since the last build, when the grid stays the same (dem/neighbor_build.cpp,
+  // RebuildPart). A pure saving: bit-identical results either way; false builds it all.
+  bool partial_rebuild = true;
   Vec3 domain_min, domain_max;  // box that holds every particle; sets the cell grid [m]
   std::vector<Plane> planes;
   // Health limits (Step() reports, the caller decides to stop).
@@ -113,16 +117,18 @@ struct Particles {
 };
 
 struct NeighborStats {
-  int64_t builds = 0;         // neighbour-list builds so far
-  int64_t near_builds = 0;    // near-list builds so far (SystemConfig::near_fraction)
-  int64_t near_pairs = 0;     // near pairs at the last near-list build
-  int64_t pairs = 0;          // half-list pairs (within cutoff + skin) at the last build
-  int64_t contacts = 0;       // particle-particle pairs in contact after the last step
-  int64_t wall_contacts = 0;  // particle-plane contacts after the last step
-  int64_t mesh_contacts = 0;  // particle-mesh contacts after the last step (after deduplication)
-  int64_t awake = 0;          // particles awake (integrated) at the last step
-  double max_overlap = 0;     // deepest overlap at the last step: particle-particle, -plane or
-                              // -mesh, / the smaller diameter [-]
+  int64_t builds = 0;          // neighbour-list builds so far
+  int64_t partial_builds = 0;  // of those, builds of a part (SystemConfig::partial_rebuild) since
+                               // the System was made or restored
+  int64_t near_builds = 0;     // near-list builds so far (SystemConfig::near_fraction)
+  int64_t near_pairs = 0;      // near pairs at the last near-list build
+  int64_t pairs = 0;           // half-list pairs (within cutoff + skin) at the last build
+  int64_t contacts = 0;        // particle-particle pairs in contact after the last step
+  int64_t wall_contacts = 0;   // particle-plane contacts after the last step
+  int64_t mesh_contacts = 0;   // particle-mesh contacts after the last step (after deduplication)
+  int64_t awake = 0;           // particles awake (integrated) at the last step
+  double max_overlap = 0;      // deepest overlap at the last step: particle-particle, -plane or
+                               // -mesh, / the smaller diameter [-]
 };
 
 // Wall-clock seconds spent in each part of Step() since the system was made: the breakdown a

@@ -554,16 +554,17 @@ int BenchStep(const BenchStepOptions& options) {
   std::printf(
       "{\"bench\":\"step\",\"particles\":%zu,\"awake_per_step\":%.0f,\"steps\":%lld,"
       "\"threads\":%d,\"wall_s\":%.4f,\"ms_per_step\":%.4f,\"awake_particle_steps_per_s\":%.4g,"
-      "\"neighbor_builds\":%lld,\"near_builds\":%lld,\"near_pairs\":%lld,\"contacts\":%lld,%s,%s"
+      "\"neighbor_builds\":%lld,\"partial_builds\":%lld,\"near_builds\":%lld,\"near_pairs\":%lld,"
+      "\"contacts\":%lld,%s,%s"
       "\"peak_rss_mb\":%.1f,"
       "\"state_hash\":\"%016llx\"}\n",
       system->particles().size(), awake / steps, static_cast<long long>(options.steps),
       system->num_threads(), wall, 1e3 * wall / steps, awake / wall,
       static_cast<long long>(ns.builds - before.builds),
+      static_cast<long long>(ns.partial_builds - before.partial_builds),
       static_cast<long long>(ns.near_builds - before.near_builds),
       static_cast<long long>(ns.near_pairs), static_cast<long long>(ns.contacts), phases.c_str(),
-      arm_json.c_str(),
-      PeakRssMb(), static_cast<unsigned long long>(system->StateHash()));
+      arm_json.c_str(), PeakRssMb(), static_cast<unsigned long long>(system->StateHash()));
   return 0;
 }
 
