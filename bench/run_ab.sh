@@ -6,9 +6,15 @@
 #
 #   BINS="/tmp/base/scoopsim build/scoopsim" bench/run_ab.sh scenes/tiny_dig.yaml
 #   BINS="..." NRUNS=5 THREADS=2 LABEL=isa bench/run_ab.sh scenes/quick_dig.yaml
+#   BINS="..." STOP_AFTER=0.75 bench/run_ab.sh out/lookup/cases/snow_b15.parts/pass_2.h5
+#
+# With STOP_AFTER, the argument is a stopped run's output (OUT.h5 beside its OUT.restart.h5): each
+# run goes on from a fresh copy of the two (`run --resume`) to --stop-after STOP_AFTER (seconds
+# from that run's start), timing a window of a long run from its checkpoint, the reading and
+# writing of the files included.
 #
 # Environment: BINS (required: two binaries, the baseline first), NRUNS (5), THREADS (1), LABEL
-# (a word for the CSV rows), MACHINE (hostname).
+# (a word for the CSV rows), MACHINE (hostname), STOP_AFTER (none).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 : "${BINS:?set BINS to two binaries, baseline first}"
@@ -30,8 +36,15 @@ export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 for r in $(seq "$NRUNS"); do
   for b in $BINS; do
     out="$work/run.h5"
-    /usr/bin/time -f "%U %S %e" -o "$work/time" "$b" run "$SCENE" -o "$out" --threads "$THREADS" \
-      --quiet >/dev/null 2>&1
+    if [ -n "${STOP_AFTER:-}" ]; then
+      cp "$SCENE" "$out"
+      cp "${SCENE%.h5}.restart.h5" "$work/run.restart.h5"
+      /usr/bin/time -f "%U %S %e" -o "$work/time" "$b" run --resume "$out" --threads "$THREADS" \
+        --stop-after "$STOP_AFTER" --quiet >/dev/null 2>&1
+    else
+      /usr/bin/time -f "%U %S %e" -o "$work/time" "$b" run "$SCENE" -o "$out" --threads "$THREADS" \
+        --quiet >/dev/null 2>&1
+    fi
     read -r user sys wall <"$work/time"
     hash=$(/usr/bin/python3 -c "import h5py,sys; print(h5py.File(sys.argv[1],'r').attrs['state_hash'])" "$out")
     cpu=$(awk "BEGIN{print $user + $sys}")

@@ -308,18 +308,26 @@ void ShiftTail(std::vector<T>& v, size_t from, int64_t delta) {
   }
 }
 
-// The build for a bed of which only a part moved (with sleeping, a dig: ~7% of the paper bed,
+// The build for a bed of which only parts moved (with sleeping, a dig: ~7% of the paper bed,
 // while a full build walks all of it). A particle that no step has moved since the last build
 // (Workspace::moved) sits where it was, with its sort key. So when the grid is the same
-// (FindGridBox), the slabs s0 .. s1 that hold every moved particle, before and after, are the
-// only ones whose order changes; their particles are sorted again among themselves, and the
-// list is made again for those slabs and the one before (whose pairs reach into s0). Every
-// other slab keeps its order, its pairs and their history; the pair arrays after the part are
-// shifted by the change in its pair count. The result is the full build's, bit for bit
-// (PartialRebuildTest): the same order, the same pairs in the same places, the same history (a
-// pair of two unmoved particles was never in a near list since the last build, so its history
-// is still as that build left it). Returns false, changing nothing, where it does not apply
-// (clumps, which move their sleepers; history to apply; another grid; most of the bed moved).
+// (FindGridBox), only the slabs that hold a moved particle, before or after, change their order:
+// runs of such slabs (a moved particle's old and new slab in one run) are sorted again, each
+// among itself, and the list is made again for each run's slabs and the slab before it (whose
+// pairs reach into the run). Every other slab keeps its order, its pairs and their history; the
+// pair arrays after a run are shifted by the change in its pair count. The result is the full
+// build's, bit for bit (PartialRebuildTest): the same order, the same pairs in the same places,
+// the same history (a pair of two unmoved particles was never in a near list since the last
+// build, so its history is still as that build left it). Returns false, changing nothing the
+// full build reads, where it does not apply (clumps, which move their sleepers; history to
+// apply; another grid; most of the bed moved).
+struct SlabRun {
+  int s0, s1;     // its slabs
+  int32_t a, b;   // its storage positions [a, b)
+  size_t visit0;  // its particles' first entry in Workspace::visit
+};
+constexpr int kMaxRuns = 16;  // more are merged (each shifts the pair arrays after it once)
+
 bool RebuildPart(Workspace& m, Particles& p, const ClumpSet& clumps, const SystemConfig& config,
                  const GridBox& box, int64_t next_id, int nt) {
   const int64_t n = static_cast<int64_t>(p.size());
@@ -329,68 +337,121 @@ bool RebuildPart(Workspace& m, Particles& p, const ClumpSet& clumps, const Syste
       m.index_of_id.size() != static_cast<size_t>(next_id) ||
       !m.list.SameGrid(box.lo, box.hi, box.cutoff, p.size()))
     return false;
-  // The slabs the moved particles were in at the build (their storage slab) or are in now.
+  // The slabs the moved particles were in at the build (their storage slab) or are in now, and
+  // every slab between the two.
   const int ns = m.list.num_slabs();
   const int32_t* slab_start = m.list.slab_start.data();
   const uint8_t* moved = m.moved.data();
   const Vec3* x = p.x.data();
-  int s0 = ns, s1 = -1;
-#pragma omp parallel for schedule(static) num_threads(nt) reduction(min : s0) reduction(max : s1)
+  std::vector<int32_t> reach(ns, -1);  // the last slab a run starting here must take in
   for (int s = 0; s < ns; ++s)
     for (int32_t i = slab_start[s]; i < slab_start[s + 1]; ++i)
       if (moved[i]) {
         const int now = m.list.SlabOf(x[i]);
-        s0 = std::min(s0, std::min(s, now));
-        s1 = std::max(s1, std::max(s, now));
+        const int lo = std::min(s, now);
+        reach[lo] = std::max(reach[lo], std::max(s, now));
       }
-  if (s1 < s0) return false;
-  const int32_t a = slab_start[s0], b = slab_start[s1 + 1];
-  if (10 * static_cast<int64_t>(b - a) > 8 * n) return false;  // most of the bed: build it all
-  // The part's particles in persistent-id order, and their new order.
-  m.visit.clear();
+  // Runs: dirty slabs joined; a gap of one clean slab joins too (that slab's list is made again
+  // anyway, as the one before the next run).
+  std::vector<SlabRun> runs;
+  for (int s = 0; s < ns; ++s) {
+    if (reach[s] < 0) continue;
+    if (!runs.empty() && s <= runs.back().s1 + 2) {
+      runs.back().s1 = std::max(runs.back().s1, reach[s]);
+    } else {
+      runs.push_back({s, reach[s], 0, 0, 0});
+    }
+  }
+  if (runs.empty()) return false;
+  while (runs.size() > kMaxRuns) {  // join the two runs closest together
+    size_t k = 1;
+    for (size_t r = 2; r < runs.size(); ++r)
+      if (runs[r].s0 - runs[r - 1].s1 < runs[k].s0 - runs[k - 1].s1) k = r;
+    runs[k - 1].s1 = runs[k].s1;
+    runs.erase(runs.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+  int64_t part = 0;
+  for (SlabRun& r : runs) {
+    r.a = slab_start[r.s0];
+    r.b = slab_start[r.s1 + 1];
+    part += r.b - r.a;
+  }
+  if (10 * part > 8 * n) return false;  // most of the bed: build it all
+  // Each run's particles in persistent-id order, one run after the other in `visit`.
   const int32_t* index_of_id = m.index_of_id.data();
-  for (int64_t id = 0; id < next_id; ++id)
-    if (index_of_id[id] >= a && index_of_id[id] < b) m.visit.push_back(index_of_id[id]);
+  {
+    std::vector<size_t> fill(runs.size());
+    size_t at = 0;
+    for (size_t r = 0; r < runs.size(); ++r) {
+      runs[r].visit0 = fill[r] = at;
+      at += static_cast<size_t>(runs[r].b - runs[r].a);
+    }
+    m.visit.resize(at);
+    for (int64_t id = 0; id < next_id; ++id) {
+      const int32_t i = index_of_id[id];
+      if (i < 0) continue;
+      const auto r = std::upper_bound(runs.begin(), runs.end(), i,
+                                      [](int32_t v, const SlabRun& run) { return v < run.a; });
+      if (r == runs.begin() || i >= (r - 1)->b) continue;
+      m.visit[fill[r - 1 - runs.begin()]++] = i;
+    }
+  }
+  // Their new order (perm[new] = old; the identity outside the runs).
   m.perm.resize(n);
-  if (!m.list.ComputeOrderSlabs(x, m.visit, s0, s1, m.perm.data() + a, p.awake.data()))
-    return false;
+  int32_t* perm = m.perm.data();
+  std::vector<int32_t> run_visit;
+  for (const SlabRun& r : runs) {
+    run_visit.assign(m.visit.begin() + r.visit0, m.visit.begin() + (r.visit0 + (r.b - r.a)));
+    if (!m.list.ComputeOrderSlabs(x, run_visit, r.s0, r.s1, perm + r.a, p.awake.data()))
+      return false;  // (the full build makes the grid's starts again)
+  }
   // From here on the build goes through. The near slots' history back into the list's arrays.
   FlushNear(m, nt);
   m.stale.list_history = false;
-  int32_t* perm = m.perm.data();
-  // perm over the whole storage (CarryPlaneHistory): the identity outside the part.
-  for (int64_t i = 0; i < a; ++i) perm[i] = static_cast<int32_t>(i);
-  for (int64_t i = b; i < n; ++i) perm[i] = static_cast<int32_t>(i);
-  ForEachArray(p, m, [&](auto& v, auto& scratch) { PermuteRange(v, perm, a, b, scratch); });
-  for (int32_t i = a; i < b; ++i) m.index_of_id[p.id[i]] = i;
   m.new_of_old.resize(n);
   int32_t* new_of_old = m.new_of_old.data();
-  for (int32_t i = a; i < b; ++i) new_of_old[perm[i]] = i;
+  {
+    int32_t i = 0;
+    for (const SlabRun& r : runs) {
+      for (; i < r.a; ++i) perm[i] = new_of_old[i] = i;
+      i = r.b;
+    }
+    for (; i < n; ++i) perm[i] = new_of_old[i] = i;
+  }
+  for (const SlabRun& r : runs) {
+    ForEachArray(p, m, [&](auto& v, auto& scratch) { PermuteRange(v, perm, r.a, r.b, scratch); });
+    for (int32_t i = r.a; i < r.b; ++i) {
+      m.index_of_id[p.id[i]] = i;
+      new_of_old[perm[i]] = i;
+    }
+  }
   FollowMeshHistory(m, next_id);
 
-  // The list of slabs L0 .. s1 made again: the old one kept (old_*, relative to its first pair
-  // P0), the new one built, the pairs after it shifted, the new one written in its place.
-  const int L0 = std::max(s0 - 1, 0);
-  const int32_t a_list = slab_start[L0];
+  // Each run's list (its slabs and the one before) made again, the last run first: the old
+  // list kept (old_*, relative to its first pair P0), the new one built, the pairs after it
+  // shifted, the new one written in its place, its history carried over as CarryPairHistory
+  // carries it.
   std::vector<int32_t>& start = m.list.start;
   std::vector<int32_t>& partner = m.list.partner;
-  const int32_t P0 = start[a_list], P1 = start[b];
-  m.old_start.resize(static_cast<size_t>(b - a_list) + 1);
-  for (int32_t i = a_list; i <= b; ++i) m.old_start[i - a_list] = start[i] - P0;
-  m.old_partner.assign(partner.begin() + P0, partner.begin() + P1);
-  m.old_shear.assign(m.shear.begin() + P0, m.shear.begin() + P1);
-  m.old_touching.assign(m.touching.begin() + P0, m.touching.begin() + P1);
-  m.list.BuildSlabs(p.x.data(), p.radius.data(), m.skin, nt, nullptr, L0, s1);
-  int64_t mid = 0;
-  for (int s = L0; s <= s1; ++s) mid += static_cast<int64_t>(m.list.slab_pairs(s).size());
-  const int64_t delta = mid - (P1 - P0);
-  ShiftTail(partner, static_cast<size_t>(P1), delta);
-  ShiftTail(m.shear, static_cast<size_t>(P1), delta);
-  ShiftTail(m.touching, static_cast<size_t>(P1), delta);
-  for (int64_t i = b; i <= n; ++i) start[i] += static_cast<int32_t>(delta);
-  {
+  for (auto run = runs.rbegin(); run != runs.rend(); ++run) {
+    const int L0 = std::max(run->s0 - 1, 0), L1 = run->s1;
+    const int32_t a_list = slab_start[L0], b = run->b;
+    const int32_t P0 = start[a_list], P1 = start[b];
+    m.old_start.resize(static_cast<size_t>(b - a_list) + 1);
+    for (int32_t i = a_list; i <= b; ++i) m.old_start[i - a_list] = start[i] - P0;
+    m.old_partner.assign(partner.begin() + P0, partner.begin() + P1);
+    m.old_shear.assign(m.shear.begin() + P0, m.shear.begin() + P1);
+    m.old_touching.assign(m.touching.begin() + P0, m.touching.begin() + P1);
+    m.list.BuildSlabs(p.x.data(), p.radius.data(), m.skin, nt, nullptr, L0, L1);
+    int64_t mid = 0;
+    for (int s = L0; s <= L1; ++s) mid += static_cast<int64_t>(m.list.slab_pairs(s).size());
+    const int64_t delta = mid - (P1 - P0);
+    ShiftTail(partner, static_cast<size_t>(P1), delta);
+    ShiftTail(m.shear, static_cast<size_t>(P1), delta);
+    ShiftTail(m.touching, static_cast<size_t>(P1), delta);
+    for (int64_t i = b; i <= n; ++i) start[i] += static_cast<int32_t>(delta);
     int32_t at = P0;
-    for (int s = L0; s <= s1; ++s) {
+    for (int s = L0; s <= L1; ++s) {
       const std::vector<int32_t>& pairs = m.list.slab_pairs(s);
       const std::vector<int32_t>& counts = m.list.slab_counts(s);
       std::copy(pairs.begin(), pairs.end(), partner.begin() + at);
@@ -399,13 +460,8 @@ bool RebuildPart(Workspace& m, Particles& p, const ClumpSet& clumps, const Syste
         at += counts[i - slab_start[s]];
       }
     }
-  }
-  // The part's history: as CarryPairHistory carries it (both ends mapped through the part's
-  // permutation; outside it a particle keeps its index).
-  std::fill(m.shear.begin() + P0, m.shear.begin() + (P0 + mid), Vec3{});
-  std::fill(m.touching.begin() + P0, m.touching.begin() + (P0 + mid), uint8_t{0});
-  {
-    const auto new_of = [&](int32_t o) { return o >= a && o < b ? new_of_old[o] : o; };
+    std::fill(m.shear.begin() + P0, m.shear.begin() + (P0 + mid), Vec3{});
+    std::fill(m.touching.begin() + P0, m.touching.begin() + (P0 + mid), uint8_t{0});
     const int32_t* o_start = m.old_start.data();
     const int32_t* o_partner = m.old_partner.data();
     const Vec3* o_shear = m.old_shear.data();
@@ -419,7 +475,7 @@ bool RebuildPart(Workspace& m, Particles& p, const ClumpSet& clumps, const Syste
     for (int64_t r = 0; r < count; ++r)
       for (int32_t q = o_start[r]; q < o_start[r + 1]; ++q) {
         if (!(o_touching[q] && Norm2(o_shear[q]) > 0.0)) continue;
-        const int32_t ia = new_of(a_list + static_cast<int32_t>(r)), ib = new_of(o_partner[q]);
+        const int32_t ia = new_of_old[a_list + r], ib = new_of_old[o_partner[q]];
         const int32_t owner = std::min(ia, ib), other = std::max(ia, ib);
         for (int32_t k = st[owner]; k < st[owner + 1]; ++k)
           if (pt[k] == other) {
@@ -429,14 +485,15 @@ bool RebuildPart(Workspace& m, Particles& p, const ClumpSet& clumps, const Syste
           }
       }
   }
-  // The plane candidates, as the full build makes them (perm is the identity outside the part).
+  // The plane candidates, as the full build makes them (perm is the identity outside the runs).
   m.old_wall_start.swap(m.wall_start);
   m.old_wall_k.swap(m.wall_k);
   m.old_wall_shear.swap(m.wall_shear);
   CountPlaneCandidates(m, p, config, nt);
   CarryPlaneHistory(m, p, config, true, n, nt);
-  // The drift since the build: only the part's particles moved.
-  std::copy(p.x.begin() + a, p.x.begin() + b, m.x_build.begin() + a);
+  // The drift since the build: only the runs' particles moved.
+  for (const SlabRun& r : runs)
+    std::copy(p.x.begin() + r.a, p.x.begin() + r.b, m.x_build.begin() + r.a);
   ++m.partial_builds;
   return true;
 }

@@ -241,8 +241,8 @@ TEST(NearListTest, SameStateAsScanningTheWholeList) {
 }
 
 // A part of the neighbour list made again (SystemConfig::partial_rebuild, RebuildPart in
-// dem/neighbor_build.cpp) against the whole: a long sleeping layer (no gravity, no floor) that a
-// cube ploughs across, half way along. Only the slabs the moved particles were in or went to are
+// dem/neighbor_build.cpp) against the whole: a long sleeping layer (no gravity, no floor) that two
+// cubes plough across, far apart. Only the slabs the moved particles were in or went to are
 // sorted and listed again, and the claim is that this is exactly the full build: the same
 // storage order, pairs and history, so the same state to the bit (StateHash), on one and two
 // threads, and through a SaveState / RestoreState half way (the restored list has no scratch).
@@ -271,30 +271,35 @@ PloughResult Plough(int threads, bool partial, bool restore_half_way) {
   s->AddParticle({0.3, 0.08, 0.01}, {}, {}, kRadius, 0);
   const double h = 0.003;
   const TriangleMesh cube = test::Cube(h, 1);
-  int mesh = s->AddMesh(cube);
+  const double along[2] = {0.06, 0.2};  // two cubes: two runs of slabs to make again
+  int mesh[2] = {s->AddMesh(cube), s->AddMesh(cube)};
   const double dt = s->config().time_step, u = 1.0;
-  int64_t touched = 0;
+  int64_t touched[2] = {0, 0};
   for (int k = 0; k < 6000; ++k) {
     if (restore_half_way && k == 3000) {
       auto fresh = std::make_unique<System>(materials, config);
       fresh->set_num_threads(threads);
-      mesh = fresh->AddMesh(cube);
+      for (int c = 0; c < 2; ++c) mesh[c] = fresh->AddMesh(cube);
       fresh->RestoreState(s->SaveState());
       s = std::move(fresh);
     }
-    MeshMotion mm;
-    mm.pose.position = {0.12, 0.002 + u * (k + 1) * dt, kRadius + h * 0.5};
-    mm.pose.orientation = AxisAngle({0, 0, 1}, 0.3);
-    mm.velocity = {0, u, 0};
-    s->SetMeshMotion(mesh, mm);
+    for (int c = 0; c < 2; ++c) {
+      MeshMotion mm;
+      mm.pose.position = {along[c], 0.002 + u * (k + 1) * dt, kRadius + h * 0.5};
+      mm.pose.orientation = AxisAngle({0, 0, 1}, 0.3);
+      mm.velocity = {0, u, 0};
+      s->SetMeshMotion(mesh[c], mm);
+    }
     const StepStatus st = s->Step();
     if (!st.ok()) {
       ADD_FAILURE() << st.message;
       break;
     }
-    touched = std::max(touched, s->mesh_wrench(mesh).contacts);
+    for (int c = 0; c < 2; ++c)
+      touched[c] = std::max(touched[c], s->mesh_wrench(mesh[c]).contacts);
   }
-  EXPECT_GT(touched, 0);  // the cube did plough into the layer
+  EXPECT_GT(touched[0], 0);  // each cube did plough into the layer
+  EXPECT_GT(touched[1], 0);
   return {s->StateHash(), s->neighbor_stats()};
 }
 
