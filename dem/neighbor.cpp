@@ -61,11 +61,6 @@ bool NeighborList::SameGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_
   return same;
 }
 
-int64_t NeighborList::CellKey(const Vec3& x, int c[3]) const {
-  for (int g = 0; g < 3; ++g) c[g] = CellAlong(g, x);
-  return (static_cast<int64_t>(c[0]) * n_[1] + c[1]) * n_[2] + c[2];
-}
-
 void NeighborList::SlabSpan(const Vec3& lo, const Vec3& hi, int* first, int* last) const {
   // CellAlong(0, .) is a non-decreasing function of the slab-axis coordinate.
   *first = std::isfinite(lo[axis_[0]]) ? CellAlong(0, lo) : 0;

@@ -104,7 +104,10 @@ class NeighborList {
     const int k = std::isfinite(u) ? static_cast<int>(std::floor(std::clamp(u, -1.0, 1e9))) : 0;
     return std::clamp(k, 0, n_[g] - 1);
   }
-  int64_t CellKey(const Vec3& x, int c[3]) const;
+  [[gnu::always_inline]] int64_t CellKey(const Vec3& x, int c[3]) const {
+    for (int g = 0; g < 3; ++g) c[g] = CellAlong(g, x);
+    return (static_cast<int64_t>(c[0]) * n_[1] + c[1]) * n_[2] + c[2];
+  }
 
   Vec3 lo_;
   double inv_cell_ = 0;

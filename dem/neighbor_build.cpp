@@ -295,19 +295,6 @@ void PermuteRange(std::vector<T>& v, const int32_t* perm, int32_t a, int32_t b,
   std::copy(scratch.begin(), scratch.end(), v.begin() + a);
 }
 
-// Moves v's entries from `from` on by `delta` places (the array grows or shrinks by delta).
-template <typename T>
-void ShiftTail(std::vector<T>& v, size_t from, int64_t delta) {
-  const size_t old_size = v.size();
-  if (delta > 0) {
-    ResizeWithRoom(v, old_size + static_cast<size_t>(delta));
-    std::copy_backward(v.begin() + from, v.begin() + old_size, v.end());
-  } else if (delta < 0) {
-    std::copy(v.begin() + from, v.end(), v.begin() + (from + delta));
-    v.resize(old_size + delta);
-  }
-}
-
 // The build for a bed of which only parts moved (with sleeping, a dig: ~7% of the paper bed,
 // while a full build walks all of it). A particle that no step has moved since the last build
 // (Workspace::moved) sits where it was, with its sort key. So when the grid is the same
@@ -427,64 +414,90 @@ bool RebuildPart(Workspace& m, Particles& p, const ClumpSet& clumps, const Syste
   }
   FollowMeshHistory(m, next_id);
 
-  // Each run's list (its slabs and the one before) made again, the last run first: the old
-  // list kept (old_*, relative to its first pair P0), the new one built, the pairs after it
-  // shifted, the new one written in its place, its history carried over as CarryPairHistory
-  // carries it.
+  // Each run's list (its slabs and the one before) made again, and the pair arrays written anew
+  // in one sweep into the spare ones (old_*): the pairs between runs copied, each run's new ones
+  // in its place. Then each run's history carried over from the old arrays as CarryPairHistory
+  // carries it, and the arrays swapped.
   std::vector<int32_t>& start = m.list.start;
-  std::vector<int32_t>& partner = m.list.partner;
-  for (auto run = runs.rbegin(); run != runs.rend(); ++run) {
-    const int L0 = std::max(run->s0 - 1, 0), L1 = run->s1;
-    const int32_t a_list = slab_start[L0], b = run->b;
-    const int32_t P0 = start[a_list], P1 = start[b];
-    m.old_start.resize(static_cast<size_t>(b - a_list) + 1);
-    for (int32_t i = a_list; i <= b; ++i) m.old_start[i - a_list] = start[i] - P0;
-    m.old_partner.assign(partner.begin() + P0, partner.begin() + P1);
-    m.old_shear.assign(m.shear.begin() + P0, m.shear.begin() + P1);
-    m.old_touching.assign(m.touching.begin() + P0, m.touching.begin() + P1);
+  const std::vector<int32_t>& partner = m.list.partner;
+  const size_t num_runs = runs.size();
+  std::vector<int32_t> p0(num_runs), p1(num_runs), first(num_runs), old_at(num_runs + 1, 0);
+  std::vector<int64_t> mid(num_runs, 0);
+  int64_t total = static_cast<int64_t>(partner.size());
+  for (size_t k = 0; k < num_runs; ++k) {
+    const int L0 = std::max(runs[k].s0 - 1, 0), L1 = runs[k].s1;
+    first[k] = slab_start[L0];
+    p0[k] = start[first[k]];
+    p1[k] = start[runs[k].b];
+    old_at[k + 1] = old_at[k] + (runs[k].b - first[k]) + 1;
     m.list.BuildSlabs(p.x.data(), p.radius.data(), m.skin, nt, nullptr, L0, L1);
-    int64_t mid = 0;
-    for (int s = L0; s <= L1; ++s) mid += static_cast<int64_t>(m.list.slab_pairs(s).size());
-    const int64_t delta = mid - (P1 - P0);
-    ShiftTail(partner, static_cast<size_t>(P1), delta);
-    ShiftTail(m.shear, static_cast<size_t>(P1), delta);
-    ShiftTail(m.touching, static_cast<size_t>(P1), delta);
-    for (int64_t i = b; i <= n; ++i) start[i] += static_cast<int32_t>(delta);
-    int32_t at = P0;
-    for (int s = L0; s <= L1; ++s) {
-      const std::vector<int32_t>& pairs = m.list.slab_pairs(s);
-      const std::vector<int32_t>& counts = m.list.slab_counts(s);
-      std::copy(pairs.begin(), pairs.end(), partner.begin() + at);
-      for (int32_t i = slab_start[s]; i < slab_start[s + 1]; ++i) {
-        start[i] = at;
-        at += counts[i - slab_start[s]];
+    for (int s = L0; s <= L1; ++s) mid[k] += static_cast<int64_t>(m.list.slab_pairs(s).size());
+    total += mid[k] - (p1[k] - p0[k]);
+  }
+  m.old_start.resize(old_at[num_runs]);  // each run's old starts, relative to its p0
+  for (size_t k = 0; k < num_runs; ++k)
+    for (int32_t i = first[k]; i <= runs[k].b; ++i)
+      m.old_start[old_at[k] + (i - first[k])] = start[i] - p0[k];
+  ResizeWithRoom(m.old_partner, total);
+  ResizeWithRoom(m.old_shear, total);
+  ResizeWithRoom(m.old_touching, total);
+  {
+    int32_t from = 0, to = 0, i = 0;  // old and new pair positions, and the next particle
+    const auto copy_until = [&](int32_t old_end, int32_t particle_end) {
+      std::copy(partner.begin() + from, partner.begin() + old_end, m.old_partner.begin() + to);
+      std::copy(m.shear.begin() + from, m.shear.begin() + old_end, m.old_shear.begin() + to);
+      std::copy(m.touching.begin() + from, m.touching.begin() + old_end,
+                m.old_touching.begin() + to);
+      for (; i < particle_end; ++i) start[i] += to - from;
+      to += old_end - from;
+      from = old_end;
+    };
+    for (size_t k = 0; k < num_runs; ++k) {
+      copy_until(p0[k], first[k]);
+      const int L0 = std::max(runs[k].s0 - 1, 0), L1 = runs[k].s1;
+      for (int s = L0; s <= L1; ++s) {
+        const std::vector<int32_t>& pairs = m.list.slab_pairs(s);
+        const std::vector<int32_t>& counts = m.list.slab_counts(s);
+        std::copy(pairs.begin(), pairs.end(), m.old_partner.begin() + to);
+        for (i = slab_start[s]; i < slab_start[s + 1]; ++i) {
+          start[i] = to;
+          to += counts[i - slab_start[s]];
+        }
       }
+      std::fill(m.old_shear.begin() + (to - mid[k]), m.old_shear.begin() + to, Vec3{});
+      std::fill(m.old_touching.begin() + (to - mid[k]), m.old_touching.begin() + to, uint8_t{0});
+      from = p1[k];
     }
-    std::fill(m.shear.begin() + P0, m.shear.begin() + (P0 + mid), Vec3{});
-    std::fill(m.touching.begin() + P0, m.touching.begin() + (P0 + mid), uint8_t{0});
-    const int32_t* o_start = m.old_start.data();
-    const int32_t* o_partner = m.old_partner.data();
-    const Vec3* o_shear = m.old_shear.data();
-    const uint8_t* o_touching = m.old_touching.data();
+    copy_until(static_cast<int32_t>(partner.size()), static_cast<int32_t>(n + 1));
+  }
+  for (size_t k = 0; k < num_runs; ++k) {
+    const int32_t* o_start = m.old_start.data() + old_at[k];
+    const int32_t* o_partner = partner.data() + p0[k];
+    const Vec3* o_shear = m.shear.data() + p0[k];
+    const uint8_t* o_touching = m.touching.data() + p0[k];
     const int32_t* st = start.data();
-    const int32_t* pt = partner.data();
-    Vec3* shear = m.shear.data();
-    uint8_t* touching = m.touching.data();
-    const int64_t count = b - a_list;
+    const int32_t* pt = m.old_partner.data();
+    Vec3* shear = m.old_shear.data();
+    uint8_t* touching = m.old_touching.data();
+    const int32_t a_list = first[k];
+    const int64_t count = runs[k].b - a_list;
 #pragma omp parallel for schedule(static) num_threads(nt)
     for (int64_t r = 0; r < count; ++r)
       for (int32_t q = o_start[r]; q < o_start[r + 1]; ++q) {
         if (!(o_touching[q] && Norm2(o_shear[q]) > 0.0)) continue;
         const int32_t ia = new_of_old[a_list + r], ib = new_of_old[o_partner[q]];
         const int32_t owner = std::min(ia, ib), other = std::max(ia, ib);
-        for (int32_t k = st[owner]; k < st[owner + 1]; ++k)
-          if (pt[k] == other) {
-            shear[k] = owner == ia ? o_shear[q] : -o_shear[q];
-            touching[k] = 1;
+        for (int32_t e = st[owner]; e < st[owner + 1]; ++e)
+          if (pt[e] == other) {
+            shear[e] = owner == ia ? o_shear[q] : -o_shear[q];
+            touching[e] = 1;
             break;
           }
       }
   }
+  m.list.partner.swap(m.old_partner);
+  m.shear.swap(m.old_shear);
+  m.touching.swap(m.old_touching);
   // The plane candidates, as the full build makes them (perm is the identity outside the runs).
   m.old_wall_start.swap(m.wall_start);
   m.old_wall_k.swap(m.wall_k);
