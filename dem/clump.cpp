@@ -420,7 +420,7 @@ void FreeRotation(int k, double tau, const Vec3& inertia, Quat* q, Vec3* l) {
 
 }  // namespace
 
-ClumpSet::BeginReport ClumpSet::BeginStep(Particles& p, double dt, int threads) {
+ClumpSet::BeginReport ClumpSet::BeginStep(Particles& p, double dt, int threads, uint8_t* moved) {
   BeginReport report;
   Clumps& s = state_;
   const int64_t n = static_cast<int64_t>(s.size());
@@ -437,6 +437,7 @@ ClumpSet::BeginReport ClumpSet::BeginStep(Particles& p, double dt, int threads) 
       const int32_t i = index_[e];
       if (p.awake[i] == 0) report.woke = true;
       p.awake[i] = 1;
+      if (moved != nullptr) moved[i] = 1;
     }
   }
   // Half kick, drift, placement (velocity Verlet; DLM splitting for the rotation).

@@ -154,7 +154,9 @@ class ClumpSet {
   // After the spheres' own first half kick and drift: wakes a sleeping clump that has an awake
   // sphere (all its spheres, at rest), then half kick + drift of every awake clump and placement
   // of its spheres (force and torque zeroed for the coming force pass).
-  BeginReport BeginStep(Particles& p, double dt, int threads);
+  // `moved` (one flag per particle, or null): set for the spheres of each clump it wakes, which
+  // move from this step on (Workspace::moved, for the neighbour list's partial build).
+  BeginReport BeginStep(Particles& p, double dt, int threads, uint8_t* moved = nullptr);
   // After the force pass: sums each awake clump's sphere forces (+ m g) and torques about its CoM
   // (in template order), second half kick, sphere velocities. Returns false on a non-finite state.
   bool EndStep(Particles& p, const Vec3& gravity, double dt, int threads);

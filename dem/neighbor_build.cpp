@@ -306,8 +306,8 @@ void PermuteRange(std::vector<T>& v, const int32_t* perm, int32_t a, int32_t b,
 // build's, bit for bit (PartialRebuildTest): the same order, the same pairs in the same places,
 // the same history (a pair of two unmoved particles was never in a near list since the last
 // build, so its history is still as that build left it). Returns false, changing nothing the
-// full build reads, where it does not apply (clumps, which move their sleepers; history to
-// apply; another grid; most of the bed moved).
+// full build reads, where it does not apply (history to apply; another grid; most of the bed
+// moved).
 struct SlabRun {
   int s0, s1;     // its slabs
   int32_t a, b;   // its storage positions [a, b)
@@ -315,13 +315,12 @@ struct SlabRun {
 };
 constexpr int kMaxRuns = 16;  // more are merged (each shifts the pair arrays after it once)
 
-bool RebuildPart(Workspace& m, Particles& p, const ClumpSet& clumps, const SystemConfig& config,
+bool RebuildPart(Workspace& m, Particles& p, ClumpSet& clumps, const SystemConfig& config,
                  const GridBox& box, int64_t next_id, int nt) {
   const int64_t n = static_cast<int64_t>(p.size());
   if (!config.partial_rebuild || !config.sleep.enabled || m.stale.list || m.stale.rebuild ||
-      !m.pending.empty() || !clumps.empty() || m.moved.size() != p.size() ||
-      m.x_build.size() != p.size() || m.list.start.size() != p.size() + 1 ||
-      m.index_of_id.size() != static_cast<size_t>(next_id) ||
+      !m.pending.empty() || m.moved.size() != p.size() || m.x_build.size() != p.size() ||
+      m.list.start.size() != p.size() + 1 || m.index_of_id.size() != static_cast<size_t>(next_id) ||
       !m.list.SameGrid(box.lo, box.hi, box.cutoff, p.size()))
     return false;
   // The slabs the moved particles were in at the build (their storage slab) or are in now, and
@@ -413,6 +412,7 @@ bool RebuildPart(Workspace& m, Particles& p, const ClumpSet& clumps, const Syste
     }
   }
   FollowMeshHistory(m, next_id);
+  const int32_t* clump_of = clumps.Reindex(p, next_id);  // no pairs within a clump
 
   // Each run's list (its slabs and the one before) made again, and the pair arrays written anew
   // in one sweep into the spare ones (old_*): the pairs between runs copied, each run's new ones
@@ -430,7 +430,7 @@ bool RebuildPart(Workspace& m, Particles& p, const ClumpSet& clumps, const Syste
     p0[k] = start[first[k]];
     p1[k] = start[runs[k].b];
     old_at[k + 1] = old_at[k] + (runs[k].b - first[k]) + 1;
-    m.list.BuildSlabs(p.x.data(), p.radius.data(), m.skin, nt, nullptr, L0, L1);
+    m.list.BuildSlabs(p.x.data(), p.radius.data(), m.skin, nt, clump_of, L0, L1);
     for (int s = L0; s <= L1; ++s) mid[k] += static_cast<int64_t>(m.list.slab_pairs(s).size());
     total += mid[k] - (p1[k] - p0[k]);
   }

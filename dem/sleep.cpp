@@ -158,8 +158,11 @@ void RefreshActive(Workspace& m, const Particles& p, bool clumps, int nt) {
   const bool built = !m.stale.list && m.x_build.size() == p.size();
   const int64_t n = static_cast<int64_t>(p.size());
   const uint8_t* awake = p.awake.data();
-  // Clumps place their spheres themselves: then any sleeper may have moved.
-  const bool tracked = m.moved.size() == p.size() && !clumps;
+  // Clumps place their spheres themselves, but only an awake clump's, whose spheres are all awake
+  // whenever the active list is made (SyncSleep puts a clump to sleep whole or keeps every sphere
+  // awake) or were marked when it woke (ClumpSet::BeginStep, before this list is made again).
+  static_cast<void>(clumps);
+  const bool tracked = m.moved.size() == p.size();
   if (!tracked) m.moved.assign(n, 1);
   uint8_t* moved = m.moved.data();
   // Count per chunk, then fill each chunk's run in storage order (chunks: the result does not

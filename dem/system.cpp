@@ -235,7 +235,8 @@ StepStatus System::Step(const std::function<void()>& motion) {
   lap(phase_times_.sleep);
   double max_v2 = internal::KickDrift(m, p_, config_, nt);
   if (have_clumps) {  // rigid clumps (dem/clump.h): move the bodies, place their spheres
-    const ClumpSet::BeginReport r = clumps_.BeginStep(p_, dt, nt);
+    const ClumpSet::BeginReport r =
+        clumps_.BeginStep(p_, dt, nt, m.moved.size() == p_.size() ? m.moved.data() : nullptr);
     m.inv_spin_kicked = false;  // the spheres' spins were set after the kick
     max_v2 = std::max(max_v2, r.max_member_speed2);
     if (r.woke) {  // their pairs are listed: only the visiting lists change

@@ -250,7 +250,7 @@ struct PloughResult {
   uint64_t hash = 0;
   NeighborStats stats;
 };
-PloughResult Plough(int threads, bool partial, bool restore_half_way) {
+PloughResult Plough(int threads, bool partial, bool restore_half_way, bool dimers = false) {
   SystemConfig config = LayerConfig();
   config.domain_min = {-0.04, -0.04, -0.01};
   config.domain_max = {0.32, 0.09, 0.02};
@@ -260,10 +260,22 @@ PloughResult Plough(int threads, bool partial, bool restore_half_way) {
   const auto materials = test::SnowAndSteel({0.5, 0.5, 0.05}, {0.5, 0.5, 0.05});
   auto s = std::make_unique<System>(materials, config);
   s->set_num_threads(threads);
+  // The layer: spheres, or rigid dimers (two spheres 1.2 r apart across the plough's path).
+  const int dimer =
+      dimers ? s->AddClumpTemplate(
+                   {"dimer", {{0, -0.6 * kRadius, 0}, {0, 0.6 * kRadius, 0}}, {kRadius, kRadius}})
+             : -1;
   for (int j = 0; j < 6; ++j)
-    for (int i = 0; i < 70; ++i)
-      s->AddParticle({0.01 + i * 2.2 * kRadius, 0.01 + j * 2.2 * kRadius, kRadius}, {}, {}, kRadius,
-                     0);
+    for (int i = 0; i < 70; ++i) {
+      const Vec3 at{0.01 + i * 2.2 * kRadius, 0.01 + j * (dimers ? 3.4 : 2.2) * kRadius, kRadius};
+      if (dimers) {
+        Pose pose;
+        pose.position = at;
+        s->AddClump(dimer, pose, {}, {}, 0);
+      } else {
+        s->AddParticle(at, {}, {}, kRadius, 0);
+      }
+    }
   // Two anchors at opposite corners, asleep from the first check on (no gravity, nothing near):
   // they hold the bounding box that the cell grid spans, as a dug bed's sleeping floor and far
   // ends do, so that the grid stays the same from one build to the next.
@@ -295,8 +307,7 @@ PloughResult Plough(int threads, bool partial, bool restore_half_way) {
       ADD_FAILURE() << st.message;
       break;
     }
-    for (int c = 0; c < 2; ++c)
-      touched[c] = std::max(touched[c], s->mesh_wrench(mesh[c]).contacts);
+    for (int c = 0; c < 2; ++c) touched[c] = std::max(touched[c], s->mesh_wrench(mesh[c]).contacts);
   }
   EXPECT_GT(touched[0], 0);  // each cube did plough into the layer
   EXPECT_GT(touched[1], 0);
@@ -318,6 +329,22 @@ TEST(PartialRebuildTest, SameStateAsTheFullBuild) {
   const PloughResult resumed = Plough(2, true, true);
   EXPECT_EQ(resumed.hash, full.hash);
   EXPECT_GT(resumed.stats.partial_builds, 0);  // (counted since the restore)
+}
+
+// The same with rigid clumps (dem/clump.h), which move their spheres themselves and wake and
+// sleep whole: a layer of dimers.
+TEST(PartialRebuildTest, ClumpsSameStateAsTheFullBuild) {
+  const PloughResult full = Plough(1, false, false, true);
+  for (const int threads : {1, 2}) {
+    SCOPED_TRACE(threads);
+    const PloughResult part = Plough(threads, true, false, true);
+    EXPECT_EQ(part.hash, full.hash);
+    EXPECT_EQ(part.stats.builds, full.stats.builds);
+    EXPECT_GT(part.stats.partial_builds, part.stats.builds / 2);
+  }
+  const PloughResult resumed = Plough(2, true, true, true);
+  EXPECT_EQ(resumed.hash, full.hash);
+  EXPECT_GT(resumed.stats.partial_builds, 0);
 }
 
 }  // namespace
