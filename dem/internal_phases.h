@@ -97,9 +97,9 @@ void IndexBonds(Workspace& m, const Particles& p);
 
 // Sleep/wake decisions (every sleep.check_every steps); marks the lists stale when any changed.
 void UpdateSleep(Workspace& m, Particles& p, const SleepConfig& sc, int nt);
-// Lists the awake particles (Workspace::active) and measures the sleepers' drift since the build.
-// clumps: the System has clumps (which place their spheres themselves).
-void RefreshActive(Workspace& m, const Particles& p, bool clumps, int nt);
+// Lists the awake particles (Workspace::active), marks them moved since the build, and measures
+// the sleepers' drift since the build.
+void RefreshActive(Workspace& m, const Particles& p, int nt);
 // Wakes every particle, with zero force and torque (sleeping switched off).
 void WakeAll(Particles& p);
 

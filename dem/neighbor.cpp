@@ -73,12 +73,8 @@ void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit
   const int64_t per_slab = static_cast<int64_t>(n_[1]) * n_[2];
   std::vector<int64_t> key(n);
 #pragma omp parallel for schedule(static) num_threads(num_threads)
-  for (int64_t i = 0; i < n; ++i) {
-    int c[3];
-    const int64_t cell = CellKey(x[visit[i]], c);
-    const int64_t half = awake != nullptr && !awake[visit[i]] ? 1 : 0;  // asleep: second half
-    key[i] = (2 * c[0] + half) * per_slab + (cell - c[0] * per_slab);
-  }
+  for (int64_t i = 0; i < n; ++i)
+    key[i] = SortKey(x[visit[i]], awake != nullptr && !awake[visit[i]]);
   std::fill(count_.begin(), count_.end(), 0);
   for (int64_t i = 0; i < n; ++i) ++count_[key[i]];
   // Counting sort, stable in visit order.
@@ -105,10 +101,7 @@ bool NeighborList::ComputeOrderSlabs(const Vec3* x, const std::vector<int32_t>& 
   std::vector<int64_t>& key = key_;
   key.resize(visit.size());
   for (size_t i = 0; i < visit.size(); ++i) {
-    int c[3];
-    const int64_t cell = CellKey(x[visit[i]], c);
-    const int64_t half = awake != nullptr && !awake[visit[i]] ? 1 : 0;
-    key[i] = (2 * c[0] + half) * per_slab + (cell - c[0] * per_slab);
+    key[i] = SortKey(x[visit[i]], awake != nullptr && !awake[visit[i]]);
     if (key[i] < key_lo || key[i] >= key_hi) return false;  // left the slabs: a full build
   }
   // Counting sort of the slabs' keys (the others keep their counts and starts), stable in visit

@@ -108,6 +108,14 @@ class NeighborList {
     for (int g = 0; g < 3; ++g) c[g] = CellAlong(g, x);
     return (static_cast<int64_t>(c[0]) * n_[1] + c[1]) * n_[2] + c[2];
   }
+  // The storage sort key of a particle at x (cell_start_'s index): its slab, then the awake half
+  // or (asleep) the second, then its cell within the slab.
+  [[gnu::always_inline]] int64_t SortKey(const Vec3& x, bool asleep) const {
+    int c[3];
+    const int64_t cell = CellKey(x, c);
+    const int64_t per_slab = static_cast<int64_t>(n_[1]) * n_[2];
+    return (2 * c[0] + (asleep ? 1 : 0)) * per_slab + (cell - c[0] * per_slab);
+  }
 
   Vec3 lo_;
   double inv_cell_ = 0;

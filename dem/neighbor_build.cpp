@@ -182,6 +182,20 @@ void CountPlaneCandidates(Workspace& m, const Particles& p, const SystemConfig& 
   ResizeWithRoom(m.wall_shear, wall_start[n]);
 }
 
+// Puts one pair's history on its slot in the list: the pair of storage indices a and b, listed
+// under the smaller, with its shear as seen from a (negated when b owns the slot). A pair the
+// list no longer holds (the two moved out of reach) gets nothing.
+inline void PutPairHistory(const int32_t* start, const int32_t* partner, int32_t a, int32_t b,
+                           const Vec3& shear_a, Vec3* shear, uint8_t* touching) {
+  const int32_t owner = std::min(a, b), other = std::max(a, b);
+  for (int32_t k = start[owner]; k < start[owner + 1]; ++k)
+    if (partner[k] == other) {
+      shear[k] = owner == a ? shear_a : -shear_a;
+      touching[k] = 1;
+      return;
+    }
+}
+
 // 4. Carries the pair history over: a new pair (i, j) was the old pair of perm[i] and perm[j],
 // owned by the smaller of the two (its shear flips sign if the owner changed). Only pairs that
 // touched with a nonzero spring carry anything; every other pair starts afresh. So the old list
@@ -214,14 +228,8 @@ void CarryPairHistory(Workspace& m, bool carry, int64_t n_old, int64_t n, int nt
   for (int64_t oi = 0; oi < n_old; ++oi) {
     for (int32_t q = o_start[oi]; q < o_start[oi + 1]; ++q) {
       if (!(o_touching[q] && Norm2(o_shear[q]) > 0.0)) continue;
-      const int32_t a = new_of_old[oi], b = new_of_old[o_partner[q]];
-      const int32_t owner = std::min(a, b), other = std::max(a, b);
-      for (int32_t k = start[owner]; k < start[owner + 1]; ++k)
-        if (partner[k] == other) {
-          shear[k] = owner == a ? o_shear[q] : -o_shear[q];
-          touching[k] = 1;
-          break;
-        }
+      PutPairHistory(start, partner, new_of_old[oi], new_of_old[o_partner[q]], o_shear[q], shear,
+                     touching);
     }
   }
 }
@@ -269,14 +277,8 @@ void ApplyPending(Workspace& m, int64_t next_id) {
     if (ia < 0) continue;
     if (c.b >= 0) {
       if (c.b >= next_id || m.index_of_id[c.b] < 0) continue;
-      const int32_t ib = m.index_of_id[c.b];
-      const int32_t owner = std::min(ia, ib), other = std::max(ia, ib);
-      for (int32_t k = m.list.start[owner]; k < m.list.start[owner + 1]; ++k)
-        if (m.list.partner[k] == other) {
-          m.shear[k] = owner == ia ? c.shear : -c.shear;
-          m.touching[k] = 1;
-          break;
-        }
+      PutPairHistory(m.list.start.data(), m.list.partner.data(), ia, m.index_of_id[c.b], c.shear,
+                     m.shear.data(), m.touching.data());
     } else {
       const int32_t plane = static_cast<int32_t>(-1 - c.b);
       for (int32_t e = m.wall_start[ia]; e < m.wall_start[ia + 1]; ++e)
@@ -485,14 +487,8 @@ bool RebuildPart(Workspace& m, Particles& p, ClumpSet& clumps, const SystemConfi
     for (int64_t r = 0; r < count; ++r)
       for (int32_t q = o_start[r]; q < o_start[r + 1]; ++q) {
         if (!(o_touching[q] && Norm2(o_shear[q]) > 0.0)) continue;
-        const int32_t ia = new_of_old[a_list + r], ib = new_of_old[o_partner[q]];
-        const int32_t owner = std::min(ia, ib), other = std::max(ia, ib);
-        for (int32_t e = st[owner]; e < st[owner + 1]; ++e)
-          if (pt[e] == other) {
-            shear[e] = owner == ia ? o_shear[q] : -o_shear[q];
-            touching[e] = 1;
-            break;
-          }
+        PutPairHistory(st, pt, new_of_old[a_list + r], new_of_old[o_partner[q]], o_shear[q], shear,
+                       touching);
       }
   }
   m.list.partner.swap(m.old_partner);

@@ -152,7 +152,7 @@ void UpdateSleep(Workspace& m, Particles& p, const SleepConfig& sc, int nt) {
   ApplySleepDecisions(m, p, sc, nt);
 }
 
-void RefreshActive(Workspace& m, const Particles& p, bool clumps, int nt) {
+void RefreshActive(Workspace& m, const Particles& p, int nt) {
   // The rebuild test scans only the active particles: the sleepers' displacement since the build
   // (frozen while they sleep) is measured here, whoever put them to sleep.
   const bool built = !m.stale.list && m.x_build.size() == p.size();
@@ -161,7 +161,6 @@ void RefreshActive(Workspace& m, const Particles& p, bool clumps, int nt) {
   // Clumps place their spheres themselves, but only an awake clump's, whose spheres are all awake
   // whenever the active list is made (SyncSleep puts a clump to sleep whole or keeps every sphere
   // awake) or were marked when it woke (ClumpSet::BeginStep, before this list is made again).
-  static_cast<void>(clumps);
   const bool tracked = m.moved.size() == p.size();
   if (!tracked) m.moved.assign(n, 1);
   uint8_t* moved = m.moved.data();

@@ -231,7 +231,7 @@ StepStatus System::Step(const std::function<void()>& motion) {
     t_phase = now;
   };
   // First half kick and drift (with sleeping, of the awake particles only).
-  if (sleeping && m.stale.active) internal::RefreshActive(m, p_, have_clumps, nt);
+  if (sleeping && m.stale.active) internal::RefreshActive(m, p_, nt);
   lap(phase_times_.sleep);
   double max_v2 = internal::KickDrift(m, p_, config_, nt);
   if (have_clumps) {  // rigid clumps (dem/clump.h): move the bodies, place their spheres
@@ -266,7 +266,7 @@ StepStatus System::Step(const std::function<void()>& motion) {
   }
 
   // Second half kick (a mesh may have woken particles).
-  if (sleeping && m.stale.active) internal::RefreshActive(m, p_, have_clumps, nt);
+  if (sleeping && m.stale.active) internal::RefreshActive(m, p_, nt);
   lap(phase_times_.sleep);
   max_v2 = 0;
   bool finite = internal::Kick(m, p_, dt, sleeping, nt, &max_v2);
