@@ -306,6 +306,10 @@ struct Workspace {
   std::vector<uint8_t> old_touching;
   std::vector<int32_t> perm, visit, index_of_id;
   std::vector<int32_t> new_of_old;  // inverse of perm (Rebuild)
+  // RebuildPart's scratch: the slabs' storage starts at the last build, and on another grid
+  // each particle's sort key on it (NeighborList::Regrid).
+  std::vector<int32_t> build_slab_start;
+  std::vector<int64_t> regrid_key;
   std::vector<double> scratch_d;
   std::vector<int64_t> scratch_i64;
   std::vector<int32_t> scratch_i32;

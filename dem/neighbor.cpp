@@ -61,6 +61,36 @@ bool NeighborList::SameGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_
   return same;
 }
 
+bool NeighborList::Regrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n, const Vec3* x,
+                          const uint8_t* awake, std::vector<int64_t>* key, int num_threads) {
+  if (cell_start_.empty() || slab_start.size() != static_cast<size_t>(n_[0]) + 1) return false;
+  const Grid g = MakeGrid(lo, hi, cutoff, n);
+  if (g.axis[0] != axis_[0] || g.n[0] != n_[0]) return false;
+  SetupGrid(lo, hi, cutoff, n);
+  const int64_t count = static_cast<int64_t>(n);
+  key->resize(n);
+  int64_t* k = key->data();
+#pragma omp parallel for schedule(static) num_threads(num_threads)
+  for (int64_t i = 0; i < count; ++i) k[i] = SortKey(x[i], awake != nullptr && !awake[i]);
+  StartsFromKeys(k, count);
+  return true;
+}
+
+void NeighborList::StartsFromKeys(const int64_t* key, int64_t n) {
+  std::fill(count_.begin(), count_.end(), 0);
+  for (int64_t i = 0; i < n; ++i) ++count_[key[i]];
+  int32_t sum = 0;
+  for (size_t k = 0; k < count_.size(); ++k) {
+    cell_start_[k] = sum;
+    sum += count_[k];
+  }
+  cell_start_.back() = sum;
+  // Slab ranges: slab s holds sort keys [2 s n1 n2, 2 (s + 1) n1 n2).
+  const int64_t per_slab = static_cast<int64_t>(n_[1]) * n_[2];
+  slab_start.resize(n_[0] + 1);
+  for (int s = 0; s <= n_[0]; ++s) slab_start[s] = cell_start_[2 * s * per_slab];
+}
+
 void NeighborList::SlabSpan(const Vec3& lo, const Vec3& hi, int* first, int* last) const {
   // CellAlong(0, .) is a non-decreasing function of the slab-axis coordinate.
   *first = std::isfinite(lo[axis_[0]]) ? CellAlong(0, lo) : 0;
@@ -70,26 +100,15 @@ void NeighborList::SlabSpan(const Vec3& lo, const Vec3& hi, int* first, int* las
 void NeighborList::ComputeOrder(const Vec3* x, const std::vector<int32_t>& visit,
                                 std::vector<int32_t>* perm, int num_threads, const uint8_t* awake) {
   const int64_t n = static_cast<int64_t>(visit.size());
-  const int64_t per_slab = static_cast<int64_t>(n_[1]) * n_[2];
   std::vector<int64_t> key(n);
 #pragma omp parallel for schedule(static) num_threads(num_threads)
   for (int64_t i = 0; i < n; ++i)
     key[i] = SortKey(x[visit[i]], awake != nullptr && !awake[visit[i]]);
-  std::fill(count_.begin(), count_.end(), 0);
-  for (int64_t i = 0; i < n; ++i) ++count_[key[i]];
   // Counting sort, stable in visit order.
-  int32_t sum = 0;
-  for (size_t k = 0; k < count_.size(); ++k) {
-    cell_start_[k] = sum;
-    sum += count_[k];
-  }
-  cell_start_.back() = sum;
+  StartsFromKeys(key.data(), n);
   perm->resize(n);
   std::vector<int32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
   for (int64_t i = 0; i < n; ++i) (*perm)[fill[key[i]]++] = visit[i];
-  // Slab ranges: slab s holds sort keys [2 s n1 n2, 2 (s + 1) n1 n2).
-  slab_start.resize(n_[0] + 1);
-  for (int s = 0; s <= n_[0]; ++s) slab_start[s] = cell_start_[2 * s * per_slab];
 }
 
 bool NeighborList::ComputeOrderSlabs(const Vec3* x, const std::vector<int32_t>& visit, int s0,

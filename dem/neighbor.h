@@ -29,6 +29,19 @@ class NeighborList {
   // their order and lists (ComputeOrderSlabs, BuildSlabs).
   bool SameGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n) const;
 
+  // Sets up the grid SetupGrid(lo, hi, cutoff, n) gives when it has the present grid's slab
+  // axis and slab count, for particles stored as ComputeOrder left them on the present grid
+  // (with moves since): each particle's sort key on the new grid into `key` (storage order), and
+  // the cell and slab starts counted from those keys, as ComputeOrder makes them where the
+  // storage order is the new grid's. Returns false where the slab axis or count differs (then
+  // only SetupGrid and a full order will do; the list may be left half changed).
+  bool Regrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n, const Vec3* x,
+              const uint8_t* awake, std::vector<int64_t>* key, int num_threads);
+  // The slab of a sort key of the present grid.
+  int SlabOfKey(int64_t key) const {
+    return static_cast<int>(key / (2 * static_cast<int64_t>(n_[1]) * n_[2]));
+  }
+
   // The slab a particle at x falls into (positions outside the grid: its boundary slabs).
   int SlabOf(const Vec3& x) const { return CellAlong(0, x); }
 
@@ -97,6 +110,8 @@ class NeighborList {
     int n[3] = {1, 1, 1}, axis[3] = {0, 1, 2};
   };
   static Grid MakeGrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n);
+  // The cell and slab starts of n particles with these sort keys, stored in key order.
+  void StartsFromKeys(const int64_t* key, int64_t n);
   // Cell index along grid axis g, clamped: particles outside the grid share its boundary cells
   // (still correct, only slower).
   int CellAlong(int g, const Vec3& x) const {

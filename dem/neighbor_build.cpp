@@ -307,9 +307,10 @@ void PermuteRange(std::vector<T>& v, const int32_t* perm, int32_t a, int32_t b,
 // pair arrays after a run are shifted by the change in its pair count. The result is the full
 // build's, bit for bit (PartialRebuildTest): the same order, the same pairs in the same places,
 // the same history (a pair of two unmoved particles was never in a near list since the last
-// build, so its history is still as that build left it). Returns false, changing nothing the
-// full build reads, where it does not apply (history to apply; another grid; most of the bed
-// moved).
+// build, so its history is still as that build left it). On another grid with the same slabs
+// (the box's top rose or fell: NeighborList::Regrid) the unmoved slabs whose order the new
+// cells change are made again too. Returns false, changing nothing the full build reads, where
+// it does not apply (history to apply; other slabs; most of the bed moved).
 struct SlabRun {
   int s0, s1;     // its slabs
   int32_t a, b;   // its storage positions [a, b)
@@ -322,23 +323,42 @@ bool RebuildPart(Workspace& m, Particles& p, ClumpSet& clumps, const SystemConfi
   const int64_t n = static_cast<int64_t>(p.size());
   if (!config.partial_rebuild || !config.sleep.enabled || m.stale.list || m.stale.rebuild ||
       !m.pending.empty() || m.moved.size() != p.size() || m.x_build.size() != p.size() ||
-      m.list.start.size() != p.size() + 1 || m.index_of_id.size() != static_cast<size_t>(next_id) ||
-      !m.list.SameGrid(box.lo, box.hi, box.cutoff, p.size()))
+      m.list.start.size() != p.size() + 1 || m.index_of_id.size() != static_cast<size_t>(next_id))
+    return false;
+  // Another grid (the bounding box grew or shrank across the slabs, as when a particle flies up
+  // out of the bed and lands again) with the same slabs: every particle's key on it, and the
+  // slabs whose unmoved particles no longer lie in its order made again too.
+  const bool regrid = !m.list.SameGrid(box.lo, box.hi, box.cutoff, p.size());
+  const int ns = m.list.num_slabs();
+  m.build_slab_start = m.list.slab_start;  // the storage slabs (Regrid counts them anew)
+  const int32_t* slab_start = m.build_slab_start.data();
+  const uint8_t* moved = m.moved.data();
+  const Vec3* x = p.x.data();
+  if (regrid &&
+      !m.list.Regrid(box.lo, box.hi, box.cutoff, p.size(), x, p.awake.data(), &m.regrid_key, nt))
     return false;
   // The slabs the moved particles were in at the build (their storage slab) or are in now, and
   // every slab between the two.
-  const int ns = m.list.num_slabs();
-  const int32_t* slab_start = m.list.slab_start.data();
-  const uint8_t* moved = m.moved.data();
-  const Vec3* x = p.x.data();
   std::vector<int32_t> reach(ns, -1);  // the last slab a run starting here must take in
-  for (int s = 0; s < ns; ++s)
-    for (int32_t i = slab_start[s]; i < slab_start[s + 1]; ++i)
-      if (moved[i]) {
-        const int now = m.list.SlabOf(x[i]);
-        const int lo = std::min(s, now);
-        reach[lo] = std::max(reach[lo], std::max(s, now));
+  const int64_t* key = m.regrid_key.data();
+  const int64_t* id = p.id.data();
+  for (int s = 0; s < ns; ++s) {
+    for (int32_t i = slab_start[s]; i < slab_start[s + 1]; ++i) {
+      if (!moved[i] && !regrid) continue;
+      const int now = regrid ? m.list.SlabOfKey(key[i]) : m.list.SlabOf(x[i]);
+      if (!moved[i] && now == s) continue;
+      const int lo = std::min(s, now);
+      reach[lo] = std::max(reach[lo], std::max(s, now));
+    }
+    if (!regrid || reach[s] >= s) continue;
+    // A slab no particle entered or left keeps its order if its keys on the new grid (ties by
+    // persistent id, as ComputeOrder orders them) still ascend.
+    for (int32_t i = slab_start[s] + 1; i < slab_start[s + 1]; ++i)
+      if (key[i] < key[i - 1] || (key[i] == key[i - 1] && id[i] < id[i - 1])) {
+        reach[s] = s;
+        break;
       }
+  }
   // Runs: dirty slabs joined; a gap of one clean slab joins too (that slab's list is made again
   // anyway, as the one before the next run).
   std::vector<SlabRun> runs;
@@ -364,7 +384,8 @@ bool RebuildPart(Workspace& m, Particles& p, ClumpSet& clumps, const SystemConfi
     r.b = slab_start[r.s1 + 1];
     part += r.b - r.a;
   }
-  if (10 * part > 8 * n) return false;  // most of the bed: build it all
+  if (10 * part > 8 * n) return false;    // most of the bed: build it all
+  slab_start = m.list.slab_start.data();  // (the same at the runs' ends; made again within them)
   // Each run's particles in persistent-id order, one run after the other in `visit`.
   const int32_t* index_of_id = m.index_of_id.data();
   {
