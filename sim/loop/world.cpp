@@ -791,6 +791,14 @@ RunResult World::Run(const RunControl& control) {
       }
     }
     if (control.stop_after > 0 && system.time() - t_start_ >= control.stop_after) {
+      if (control.checkpoint_at_stop_after && control.checkpoint_every > 0) {
+        try {
+          checkpoint();
+        } catch (const std::exception& e) {
+          Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+          result.exit_status = kExitFailure;
+        }
+      }
       Status("scoopsim: stopped at t = %.6g s (--stop-after); output closed\n", system.time());
       result.stopped_after = true;
       break;

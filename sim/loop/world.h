@@ -65,6 +65,10 @@ struct RunControl {
   double checkpoint_every = 0;  // [s]
   std::string checkpoint_path;
   std::function<void()> on_checkpoint;
+  // With checkpoint_every, stop_after also writes one where it stops (as a signal does), so that
+  // the run goes on from there (`run --stop-after T --checkpoint-every S`: a mid-dig state at T).
+  // A sweep's simulated kill leaves it false: a killed run keeps only its last periodic one.
+  bool checkpoint_at_stop_after = false;
 };
 
 // Where a dig starts when it does not start at its first pass: a dig resumed from the bed that

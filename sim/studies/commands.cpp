@@ -240,6 +240,7 @@ int RunScene(const Scene& scene, const RunOptions& options) {
   if (checkpoints) {
     control.checkpoint_every = options.checkpoint_every;
     control.checkpoint_path = restart;
+    control.checkpoint_at_stop_after = true;
   }
   const RunResult result = world.Run(control);
   if (checkpoints && result.exit_status == kExitOk && !result.stopped_after) {

@@ -335,7 +335,7 @@ TEST(CheckpointTest, ResumedWithMorePassesEqualsTheRunPlannedWithThem) {
 }
 
 // `bench step --checkpoint R` steps the dig on from R (a mid-dig state: the scoop in the bed, the
-// sleepers asleep) under the scene R holds. Oracle: the uninterrupted run. Stepped past the dig's
+// sleepers asleep, kept where `run --stop-after` stopped) under the scene R holds. Oracle: the uninterrupted run. Stepped past the dig's
 // end (World::Step does nothing then), the bench's state hash is the run's final one, on 1 and 2
 // threads. --set takes on the checkpoint (its lists made again from the changed scene: a wider
 // neighbor.skin gives more near pairs). Given both SCENE and --checkpoint, or neither: one line,
@@ -349,14 +349,18 @@ TEST(CheckpointTest, BenchStepGoesOnFromACheckpoint) {
                                        log),
             0)
       << ReadText(log);
+  // No periodic checkpoint (600 s of wall time): --stop-after keeps the state it stopped at,
+  // 0.5 s into the dig (not the one at its start).
   ASSERT_EQ(scoopsim_test::RunScoopsim("run " + scene + " -o " + out +
-                                           " --threads 1 -q --checkpoint-every 0.02 "
+                                           " --threads 1 -q --checkpoint-every 600 "
                                            "--stop-after 0.5",
                                        log),
             0)
       << ReadText(log);
   const std::string restart = (TempDir() / "bench.restart.h5").string();
   ASSERT_TRUE(fs::exists(restart));
+  EXPECT_NEAR(sim::ReadCheckpoint(restart).time, sim::SavedRun(out).Scoop().time.front() + 0.5,
+              0.01);
   const std::string hash = StateHash(reference);
   ASSERT_EQ(hash.size(), 16u);
   auto json_of = [&](const std::string& args) {
