@@ -251,10 +251,10 @@ struct PloughResult {
   NeighborStats stats;
 };
 PloughResult Plough(int threads, bool partial, bool restore_half_way, bool dimers = false,
-                    bool flyer = false) {
+                    double flyer_speed = 0) {
   SystemConfig config = LayerConfig();
   config.domain_min = {-0.04, -0.04, -0.01};
-  config.domain_max = {0.32, 0.09, flyer ? 0.2 : 0.02};
+  config.domain_max = {0.32, 0.09, flyer_speed != 0 ? 0.2 : 0.02};
   config.gravity = {0, 0, 0};
   config.planes.clear();
   config.partial_rebuild = partial;
@@ -282,9 +282,11 @@ PloughResult Plough(int threads, bool partial, bool restore_half_way, bool dimer
   // ends do, so that the grid stays the same from one build to the next.
   s->AddParticle({-0.01, -0.03, -0.005}, {}, {}, kRadius, 0);
   s->AddParticle({0.3, 0.08, 0.01}, {}, {}, kRadius, 0);
-  // A particle flying up out of the layer, between the cubes: the bounding box's top, so the
-  // grid gains a cell along z every few builds (NeighborList::Regrid).
-  if (flyer) s->AddParticle({0.13, 0.02, 0.01}, {0, 0, 2}, {}, kRadius, 0);
+  // A particle flying up out of the layer between the cubes, or falling towards it from above:
+  // the bounding box's top, so the grid gains (loses) a cell along z every few builds
+  // (NeighborList::Regrid).
+  if (flyer_speed > 0) s->AddParticle({0.13, 0.02, 0.01}, {0, 0, flyer_speed}, {}, kRadius, 0);
+  if (flyer_speed < 0) s->AddParticle({0.13, 0.02, 0.15}, {0, 0, flyer_speed}, {}, kRadius, 0);
   const double h = 0.003;
   const TriangleMesh cube = test::Cube(h, 1);
   const double along[2] = {0.06, 0.2};  // two cubes: two runs of slabs to make again
@@ -340,16 +342,31 @@ TEST(PartialRebuildTest, SameStateAsTheFullBuild) {
 // slabs. The partial build goes on from the new grid's keys (the full build's order, as the
 // unmoved slabs' keys still ascend) instead of building everything.
 TEST(PartialRebuildTest, SameStateWhileTheGridGrows) {
-  const PloughResult full = Plough(1, false, false, false, true);
+  const PloughResult full = Plough(1, false, false, false, 2.0);
   for (const int threads : {1, 2}) {
     SCOPED_TRACE(threads);
-    const PloughResult part = Plough(threads, true, false, false, true);
+    const PloughResult part = Plough(threads, true, false, false, 2.0);
     EXPECT_EQ(part.hash, full.hash);
     EXPECT_EQ(part.stats.builds, full.stats.builds);
     // Full: the first build, the two where the grid's cell cap (4 n + 4096 cells: few spheres
     // here) widens the cells, and one where most of the layer had moved. Without Regrid every
     // build that added a cell was full too: 10 of 89.
     EXPECT_LE(part.stats.builds - part.stats.partial_builds, 4);
+  }
+}
+
+// And while it shrinks: a particle falls from 0.15 m towards the layer, so the grid's top cells
+// merge (the particles of two cells in one, in persistent-id order again).
+TEST(PartialRebuildTest, SameStateWhileTheGridShrinks) {
+  const PloughResult full = Plough(1, false, false, false, -2.0);
+  for (const int threads : {1, 2}) {
+    SCOPED_TRACE(threads);
+    const PloughResult part = Plough(threads, true, false, false, -2.0);
+    EXPECT_EQ(part.hash, full.hash);
+    EXPECT_EQ(part.stats.builds, full.stats.builds);
+    // Full: the first build and two more (the cell cap, most of the layer moved); without
+    // Regrid, 6 of 89.
+    EXPECT_LE(part.stats.builds - part.stats.partial_builds, 3);
   }
 }
 
