@@ -33,8 +33,8 @@ class NeighborList {
   // axis and slab count, for particles stored as ComputeOrder left them on the present grid
   // (with moves since): each particle's sort key on the new grid into `key` (storage order), and
   // the cell and slab starts counted from those keys, as ComputeOrder makes them where the
-  // storage order is the new grid's. Returns false where the slab axis or count differs (then
-  // only SetupGrid and a full order will do; the list may be left half changed).
+  // storage order is the new grid's. Returns false, changing nothing, where the slab axis or
+  // count differs (then only SetupGrid and a full order will do).
   bool Regrid(const Vec3& lo, const Vec3& hi, double cutoff, size_t n, const Vec3* x,
               const uint8_t* awake, std::vector<int64_t>* key, int num_threads);
   // The slab of a sort key of the present grid.

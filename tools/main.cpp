@@ -411,9 +411,10 @@ Command Run(CLI::App* parent) {
   args->AddTo(command, "out/run.h5", true);
   command
       ->add_option("--stop-after", args->stop_after,
-                   "Stop after this many simulated seconds from this run's start, the output "
-                   "closed as on SIGINT; with --checkpoint-every, OUT.restart.h5 keeps the state "
-                   "there to go on from (default: at the scene's end)")
+                   "Stop after this many simulated seconds from the run's start (a resumed run's "
+                   "first start), the output closed as on SIGINT; with --checkpoint-every, "
+                   "OUT.restart.h5 keeps the state there to go on from (default: at the scene's "
+                   "end)")
       ->check(tools::FinitePositive("s"));
   command
       ->add_option("--checkpoint-every", args->checkpoint_every,

@@ -717,18 +717,20 @@ RunResult World::Run(const RunControl& control) {
   RunResult result;
   control_ = &control;
   auto last_checkpoint = std::chrono::steady_clock::now();
+  // Writes one; false (the failure said) when it could not be written.
   auto checkpoint = [&] {
-    WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
-    if (control.on_checkpoint) control.on_checkpoint();
+    try {
+      WriteCheckpoint(control.checkpoint_path, MakeCheckpoint());
+      if (control.on_checkpoint) control.on_checkpoint();
+      return true;
+    } catch (const std::exception& e) {
+      Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+      return false;
+    }
   };
   if (control.checkpoint_every > 0) {
     // One at the start: a run killed before its first period (after a long pour, say) resumes.
-    try {
-      checkpoint();
-    } catch (const std::exception& e) {
-      Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
-      result.exit_status = kExitFailure;
-    }
+    if (!checkpoint()) result.exit_status = kExitFailure;
   }
   if (halted_after_pass_ > 0) {  // an earlier Run() stopped between passes: go on
     halted_after_pass_ = 0;
@@ -767,23 +769,14 @@ RunResult World::Run(const RunControl& control) {
       progress.Update(system.time() - t_start_, particle_steps_);
       if (control.checkpoint_every > 0 &&
           Seconds(std::chrono::steady_clock::now() - last_checkpoint) >= control.checkpoint_every) {
-        try {
-          checkpoint();
-        } catch (const std::exception& e) {
-          Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
+        if (!checkpoint()) {
           result.exit_status = kExitFailure;
           break;
         }
         last_checkpoint = std::chrono::steady_clock::now();
       }
       if (StopRequested()) {
-        if (control.checkpoint_every > 0) {  // go on from here, not from the last checkpoint
-          try {
-            checkpoint();
-          } catch (const std::exception& e) {
-            Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
-          }
-        }
+        if (control.checkpoint_every > 0) checkpoint();  // go on from here, not the last one
         Status("scoopsim: stopped by signal %d at t = %.6g s; output closed\n", StopSignal(),
                system.time());
         result.exit_status = kExitStopped;
@@ -791,14 +784,8 @@ RunResult World::Run(const RunControl& control) {
       }
     }
     if (control.stop_after > 0 && system.time() - t_start_ >= control.stop_after) {
-      if (control.checkpoint_at_stop_after && control.checkpoint_every > 0) {
-        try {
-          checkpoint();
-        } catch (const std::exception& e) {
-          Status("scoopsim: %s\n", OutputFailed(system.time(), e).message.c_str());
-          result.exit_status = kExitFailure;
-        }
-      }
+      if (control.checkpoint_at_stop_after && control.checkpoint_every > 0 && !checkpoint())
+        result.exit_status = kExitFailure;
       Status("scoopsim: stopped at t = %.6g s (--stop-after); output closed\n", system.time());
       result.stopped_after = true;
       break;

@@ -335,9 +335,9 @@ TEST(CheckpointTest, ResumedWithMorePassesEqualsTheRunPlannedWithThem) {
 }
 
 // `bench step --checkpoint R` steps the dig on from R (a mid-dig state: the scoop in the bed, the
-// sleepers asleep, kept where `run --stop-after` stopped) under the scene R holds. Oracle: the uninterrupted run. Stepped past the dig's
-// end (World::Step does nothing then), the bench's state hash is the run's final one, on 1 and 2
-// threads. --set takes on the checkpoint (its lists made again from the changed scene: a wider
+// sleepers asleep, kept where `run --stop-after` stopped) under the scene R holds. Oracle: the
+// uninterrupted run. Stepped past the dig's end (World::Step does nothing then), the bench's
+// state hash is the run's final one, on 1 and 2 threads. --set takes on the checkpoint (its lists made again from the changed scene: a wider
 // neighbor.skin gives more near pairs). Given both SCENE and --checkpoint, or neither: one line,
 // exit 2.
 TEST(CheckpointTest, BenchStepGoesOnFromACheckpoint) {
