@@ -43,9 +43,10 @@ constexpr int kMixedRolling = 3;
 // Hertz-Mindlin forces of a batch of particle pairs: the same law as EvaluateWallContact
 // (dem/contact.h: Hertz 1882 normal spring, Tsuji et al. 1992 damping, Mindlin 1949 no-slip
 // tangential spring with a Coulomb cap, and the rolling models), written without branches so
-// that the compiler runs one contact per SIMD lane. kOnePair: every contact has the material pair
-// constants `one`; else each its own columns of the batch. kModel: the rolling model (above).
-// kOwnSpins: the batch holds w_i and w_j (wx, wjx columns) rather than w_i - w_j.
+// that the compiler runs one contact per SIMD lane (with -fno-trapping-math: dem/CMakeLists.txt).
+// kOnePair: every contact has the material pair constants `one`; else each its own columns of the
+// batch. kModel: the rolling model (above). kOwnSpins: the batch holds w_i and w_j (wx, wjx
+// columns) rather than w_i - w_j.
 template <bool kOnePair, int kModel, bool kOwnSpins>
 void PairForces(ContactBatch& b, size_t nb, const PairConstants& one, double dt) {
   static_assert(kModel != kEdemRolling || kOwnSpins, "edem rolling needs each particle's spin");
