@@ -420,17 +420,37 @@ void FreeRotation(int k, double tau, const Vec3& inertia, Quat* q, Vec3* l) {
 
 }  // namespace
 
-ClumpSet::BeginReport ClumpSet::BeginStep(Particles& p, double dt, int threads, uint8_t* moved) {
+ClumpSet::BeginReport ClumpSet::BeginStep(Particles& p, double dt, int threads, uint8_t* moved,
+                                          double* inv_spin) {
   BeginReport report;
   Clumps& s = state_;
   const int64_t n = static_cast<int64_t>(s.size());
   // A sleeping clump with an awake sphere (touched, in a mesh zone, or sleeping switched off)
-  // wakes whole, at rest in equilibrium like a waking sphere.
+  // wakes whole, at rest in equilibrium like a waking sphere. The clumps to wake are found from
+  // the spheres in storage order where the clump of each storage index is known (one sequential
+  // pass), else from each sleeping clump's spheres (which lie anywhere in storage).
+  const bool indexed = clump_of_index_.size() == p.size();
+  if (indexed) {
+    waking_.assign(static_cast<size_t>(n), 0);
+    const uint8_t* awake = p.awake.data();
+    const uint8_t* asleep = s.asleep.data();
+    const int32_t* clump_of = clump_of_index_.data();
+    uint8_t* waking = waking_.data();
+    const int64_t spheres = static_cast<int64_t>(p.size());
+    for (int64_t i = 0; i < spheres; ++i) {  // (no branch: awake and asleep follow no pattern)
+      const int32_t c = std::max(clump_of[i], 0);
+      waking[c] |= static_cast<uint8_t>((awake[i] != 0) & (clump_of[i] >= 0) & asleep[c]);
+    }
+  }
   for (int64_t c = 0; c < n; ++c) {
     if (!s.asleep[c]) continue;
-    bool any = false;
-    for (int32_t e = s.first[c]; e < s.first[c + 1]; ++e) any = any || p.awake[index_[e]] != 0;
-    if (!any) continue;
+    if (indexed) {
+      if (!waking_[c]) continue;
+    } else {
+      bool any = false;
+      for (int32_t e = s.first[c]; e < s.first[c + 1]; ++e) any = any || p.awake[index_[e]] != 0;
+      if (!any) continue;
+    }
     s.asleep[c] = 0;
     s.v[c] = s.l[c] = s.f[c] = s.t[c] = Vec3{};
     for (int32_t e = s.first[c]; e < s.first[c + 1]; ++e) {
@@ -478,6 +498,7 @@ ClumpSet::BeginReport ClumpSet::BeginStep(Particles& p, double dt, int threads, 
     s.q[c] = Normalized(q);
     s.l[c] = l;
     const Vec3 w = s.AngularVelocity(c);
+    const double inv_w = inv_spin != nullptr ? InvNorm(w) : 0.0;
     for (int32_t e = s.first[c]; e < s.first[c + 1]; ++e) {
       const int32_t i = index_[e];
       const Vec3 r = Rotate(s.q[c], shape.offsets[e - s.first[c]]);
@@ -487,10 +508,12 @@ ClumpSet::BeginReport ClumpSet::BeginStep(Particles& p, double dt, int threads, 
       p.w[i] = w;
       p.f[i] = Vec3{};
       p.t[i] = Vec3{};
-      max2 = std::max(max2, Norm2(p.x[i] - before) / (dt * dt));
+      if (inv_spin != nullptr) inv_spin[i] = inv_w;
+      max2 = std::max(max2, Norm2(p.x[i] - before));
     }
   }
-  report.max_member_speed2 = max2;
+  // (max over a / c = (max over a) / c for c > 0: rounding keeps the order)
+  report.max_member_speed2 = max2 / (dt * dt);
   return report;
 }
 

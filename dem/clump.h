@@ -141,6 +141,11 @@ class ClumpSet {
   // Refreshes the storage index of every sphere after storage changed; returns the clump of each
   // storage index (-1 for single spheres), or nullptr when there are no clumps.
   const int32_t* Reindex(const Particles& p, int64_t next_id);
+  // The clump of each storage index as the last Reindex made it, or nullptr when there are no
+  // clumps or storage has grown since (spheres appended by System::AddParticle).
+  const int32_t* clump_of_index(size_t n) const {
+    return !empty() && clump_of_index_.size() == n ? clump_of_index_.data() : nullptr;
+  }
 
   // Step hooks (velocity Verlet for the centre of mass; for the rotation the symplectic splitting
   // of Dullweber, Leimkuhler & McLachlan 1997, J. Chem. Phys. 107:5840, the scheme of LAMMPS'
@@ -156,7 +161,9 @@ class ClumpSet {
   // of its spheres (force and torque zeroed for the coming force pass).
   // `moved` (one flag per particle, or null): set for the spheres of each clump it wakes, which
   // move from this step on (Workspace::moved, for the neighbour list's partial build).
-  BeginReport BeginStep(Particles& p, double dt, int threads, uint8_t* moved = nullptr);
+  // `inv_spin` (one per particle, or null): 1/|w| of each sphere it places (Workspace::inv_spin).
+  BeginReport BeginStep(Particles& p, double dt, int threads, uint8_t* moved = nullptr,
+                        double* inv_spin = nullptr);
   // After the force pass: sums each awake clump's sphere forces (+ m g) and torques about its CoM
   // (in template order), second half kick, sphere velocities. Returns false on a non-finite state.
   bool EndStep(Particles& p, const Vec3& gravity, double dt, int threads);
@@ -196,6 +203,7 @@ class ClumpSet {
   std::vector<int32_t> index_;        // storage index of each member (member.size())
   std::vector<int32_t> clump_of_id_;  // clump of each persistent id, -1 for single spheres
   std::vector<int32_t> clump_of_index_;
+  std::vector<uint8_t> waking_;  // BeginStep's scratch: the sleeping clumps it wakes
 };
 
 }  // namespace dem

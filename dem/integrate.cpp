@@ -9,7 +9,8 @@
 
 namespace dem::internal {
 
-double KickDrift(Workspace& m, Particles& p, const SystemConfig& config, int nt) {
+double KickDrift(Workspace& m, Particles& p, const SystemConfig& config, int nt,
+                 const int32_t* clump_of) {
   const double dt = config.time_step;
   const double h = 0.5 * dt;
   Vec3* x = p.x.data();
@@ -40,6 +41,10 @@ double KickDrift(Workspace& m, Particles& p, const SystemConfig& config, int nt)
 #pragma omp parallel for schedule(static) num_threads(nt) reduction(max : max_v2)
   for (int64_t a = 0; a < n_moving; ++a) {
     const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
+    if (clump_of != nullptr && clump_of[i] >= 0) {  // the same |v|^2; BeginStep places it
+      max_v2 = std::max(max_v2, Norm2(v[i] + (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i]));
+      continue;
+    }
     v[i] += (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
     w[i] += (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
     if (inv_spin != nullptr) inv_spin[i] = InvNorm(w[i]);
@@ -84,7 +89,8 @@ bool NeedsRebuild(Workspace& m, const Particles& p, double step_bound, bool slee
   return rebuild;
 }
 
-bool Kick(const Workspace& m, Particles& p, double dt, bool sleeping, int nt, double* max_v2_out) {
+bool Kick(const Workspace& m, Particles& p, double dt, bool sleeping, int nt, double* max_v2_out,
+          const int32_t* clump_of, const uint8_t* clump_asleep) {
   const double h = 0.5 * dt;
   Vec3* v = p.v.data();
   Vec3* w = p.w.data();
@@ -101,11 +107,17 @@ bool Kick(const Workspace& m, Particles& p, double dt, bool sleeping, int nt, do
 #pragma omp parallel for schedule(static) num_threads(nt) reduction(max : max_v2) reduction(| : bad)
   for (int64_t a = 0; a < n_kicked; ++a) {
     const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
-    v[i] += (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
-    w[i] += (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
-    const double v2 = Norm2(v[i]);
+    const Vec3 vi = v[i] + (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
+    const Vec3 wi = w[i] + (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
+    // A sphere of an awake clump: EndStep sets its v and w next (a sleeping clump's sphere that a
+    // mesh woke this step keeps the kick's until BeginStep wakes its clump).
+    if (clump_of == nullptr || clump_of[i] < 0 || clump_asleep[clump_of[i]]) {
+      v[i] = vi;
+      w[i] = wi;
+    }
+    const double v2 = Norm2(vi);
     // A finite v keeps x finite (x += dt v), so x need not be read here.
-    if (!(std::isfinite(v2) && IsFinite(w[i]))) bad = 1;
+    if (!(std::isfinite(v2) && IsFinite(wi))) bad = 1;
     max_v2 = std::max(max_v2, v2);
   }
   *max_v2_out = max_v2;

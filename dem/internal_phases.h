@@ -20,15 +20,20 @@ struct MeshState;
 
 // First half kick and drift of every moving particle (the awake ones with sleeping: the caller
 // refreshes Workspace::active first); starts this step's force with gravity and the torque at
-// zero. Returns the largest |v|^2 after the kick [m^2/s^2].
-double KickDrift(Workspace& m, Particles& p, const SystemConfig& config, int nt);
+// zero. Returns the largest |v|^2 after the kick [m^2/s^2]. `clump_of` (the clump of each storage
+// index, -1 for a single sphere; or null): a clump's sphere only counts in that |v|^2, since
+// ClumpSet::BeginStep sets its x, v, w, f and t next (and its 1/|w|).
+double KickDrift(Workspace& m, Particles& p, const SystemConfig& config, int nt,
+                 const int32_t* clump_of);
 // Adds step_bound (dt max |v| of this step) to the drift bounds of the neighbour list, the near
 // list and the mesh candidates, marks the near list stale when it may have been outrun, and says
 // whether the neighbour list must be built again (some particle may have moved skin / 2).
 bool NeedsRebuild(Workspace& m, const Particles& p, double step_bound, bool sleeping, int nt);
 // Second half kick of every moving particle. Returns whether every v and w is finite; the largest
-// |v|^2 goes to *max_v2.
-bool Kick(const Workspace& m, Particles& p, double dt, bool sleeping, int nt, double* max_v2);
+// |v|^2 goes to *max_v2. `clump_of` and `clump_asleep` (or null): a sphere of an awake clump only
+// counts in both (ClumpSet::EndStep sets its v and w next).
+bool Kick(const Workspace& m, Particles& p, double dt, bool sleeping, int nt, double* max_v2,
+          const int32_t* clump_of, const uint8_t* clump_asleep);
 
 // --- dem/neighbor_build.cpp: the neighbour list ------------------------------------------------
 

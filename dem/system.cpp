@@ -233,11 +233,16 @@ StepStatus System::Step(const std::function<void()>& motion) {
   // First half kick and drift (with sleeping, of the awake particles only).
   if (sleeping && m.stale.active) internal::RefreshActive(m, p_, nt);
   lap(phase_times_.sleep);
-  double max_v2 = internal::KickDrift(m, p_, config_, nt);
+  // The clump of each storage index: KickDrift and Kick leave a clump's spheres to it.
+  const int32_t* clump_of = clumps_.clump_of_index(p_.size());
+  double max_v2 = internal::KickDrift(m, p_, config_, nt, clump_of);
   if (have_clumps) {  // rigid clumps (dem/clump.h): move the bodies, place their spheres
-    const ClumpSet::BeginReport r =
-        clumps_.BeginStep(p_, dt, nt, m.moved.size() == p_.size() ? m.moved.data() : nullptr);
-    m.inv_spin_kicked = false;  // the spheres' spins were set after the kick
+    // With clump_of, each sphere KickDrift left is placed, its 1/|w| with it; without, the spins
+    // were set after the kick and the force pass makes them.
+    double* inv_spin = clump_of != nullptr && m.inv_spin_kicked ? m.inv_spin.data() : nullptr;
+    const ClumpSet::BeginReport r = clumps_.BeginStep(
+        p_, dt, nt, m.moved.size() == p_.size() ? m.moved.data() : nullptr, inv_spin);
+    m.inv_spin_kicked = inv_spin != nullptr;
     max_v2 = std::max(max_v2, r.max_member_speed2);
     if (r.woke) {  // their pairs are listed: only the visiting lists change
       m.stale.busy = true;
@@ -269,7 +274,9 @@ StepStatus System::Step(const std::function<void()>& motion) {
   if (sleeping && m.stale.active) internal::RefreshActive(m, p_, nt);
   lap(phase_times_.sleep);
   max_v2 = 0;
-  bool finite = internal::Kick(m, p_, dt, sleeping, nt, &max_v2);
+  clump_of = clumps_.clump_of_index(p_.size());  // (a build this step reindexed them)
+  bool finite = internal::Kick(m, p_, dt, sleeping, nt, &max_v2, clump_of,
+                               clump_of != nullptr ? clumps_.state().asleep.data() : nullptr);
   if (have_clumps && !clumps_.EndStep(p_, config_.gravity, dt, nt)) finite = false;
   time_ += dt;
   ++step_count_;
