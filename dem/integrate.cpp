@@ -3,6 +3,7 @@
 // again. System::Step (dem/system.cpp) runs them around the force passes.
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "dem/internal_phases.h"
 #include "dem/internal_workspace.h"
@@ -37,24 +38,32 @@ double KickDrift(Workspace& m, Particles& p, const SystemConfig& config, int nt,
   // at hand.
   double* inv_spin = m.want_inv_spin && m.inv_spin.size() == p.size() ? m.inv_spin.data() : nullptr;
   m.inv_spin_kicked = inv_spin != nullptr;
-  double max_v2 = 0;
+  // A clump's sphere only counts in the largest |v|^2 (the same operations); BeginStep places it.
+  // Two loops, so that a bed of spheres alone runs the loop it ran before clumps were tested.
+  const auto kick_drift = [&](auto with_clumps) {
+    double max_v2 = 0;
 #pragma omp parallel for schedule(static) num_threads(nt) reduction(max : max_v2)
-  for (int64_t a = 0; a < n_moving; ++a) {
-    const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
-    if (clump_of != nullptr && clump_of[i] >= 0) {  // the same |v|^2; BeginStep places it
-      max_v2 = std::max(max_v2, Norm2(v[i] + (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i]));
-      continue;
+    for (int64_t a = 0; a < n_moving; ++a) {
+      const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
+      if constexpr (decltype(with_clumps)::value) {
+        if (clump_of[i] >= 0) {
+          max_v2 =
+              std::max(max_v2, Norm2(v[i] + (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i]));
+          continue;
+        }
+      }
+      v[i] += (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
+      w[i] += (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
+      if (inv_spin != nullptr) inv_spin[i] = InvNorm(w[i]);
+      x[i] += dt * v[i];
+      max_v2 = std::max(max_v2, Norm2(v[i]));
+      // Start this step's force with gravity (contacts add to it in ComputeForces).
+      f[i] = (alike ? alike_mass : mass[i]) * g;
+      t[i] = Vec3{};
     }
-    v[i] += (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
-    w[i] += (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
-    if (inv_spin != nullptr) inv_spin[i] = InvNorm(w[i]);
-    x[i] += dt * v[i];
-    max_v2 = std::max(max_v2, Norm2(v[i]));
-    // Start this step's force with gravity (contacts add to it in ComputeForces).
-    f[i] = (alike ? alike_mass : mass[i]) * g;
-    t[i] = Vec3{};
-  }
-  return max_v2;
+    return max_v2;
+  };
+  return clump_of != nullptr ? kick_drift(std::true_type{}) : kick_drift(std::false_type{});
 }
 
 bool NeedsRebuild(Workspace& m, const Particles& p, double step_bound, bool sleeping, int nt) {
@@ -89,8 +98,7 @@ bool NeedsRebuild(Workspace& m, const Particles& p, double step_bound, bool slee
   return rebuild;
 }
 
-bool Kick(const Workspace& m, Particles& p, double dt, bool sleeping, int nt, double* max_v2_out,
-          const int32_t* clump_of, const uint8_t* clump_asleep) {
+bool Kick(const Workspace& m, Particles& p, double dt, bool sleeping, int nt, double* max_v2_out) {
   const double h = 0.5 * dt;
   Vec3* v = p.v.data();
   Vec3* w = p.w.data();
@@ -107,17 +115,11 @@ bool Kick(const Workspace& m, Particles& p, double dt, bool sleeping, int nt, do
 #pragma omp parallel for schedule(static) num_threads(nt) reduction(max : max_v2) reduction(| : bad)
   for (int64_t a = 0; a < n_kicked; ++a) {
     const size_t i = sleeping ? static_cast<size_t>(active[a]) : static_cast<size_t>(a);
-    const Vec3 vi = v[i] + (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
-    const Vec3 wi = w[i] + (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
-    // A sphere of an awake clump: EndStep sets its v and w next (a sleeping clump's sphere that a
-    // mesh woke this step keeps the kick's until BeginStep wakes its clump).
-    if (clump_of == nullptr || clump_of[i] < 0 || clump_asleep[clump_of[i]]) {
-      v[i] = vi;
-      w[i] = wi;
-    }
-    const double v2 = Norm2(vi);
+    v[i] += (h * (alike ? alike_inv_mass : inv_mass[i])) * f[i];
+    w[i] += (h * (alike ? alike_inv_inertia : inv_inertia[i])) * t[i];
+    const double v2 = Norm2(v[i]);
     // A finite v keeps x finite (x += dt v), so x need not be read here.
-    if (!(std::isfinite(v2) && IsFinite(wi))) bad = 1;
+    if (!(std::isfinite(v2) && IsFinite(w[i]))) bad = 1;
     max_v2 = std::max(max_v2, v2);
   }
   *max_v2_out = max_v2;

@@ -30,10 +30,8 @@ double KickDrift(Workspace& m, Particles& p, const SystemConfig& config, int nt,
 // whether the neighbour list must be built again (some particle may have moved skin / 2).
 bool NeedsRebuild(Workspace& m, const Particles& p, double step_bound, bool sleeping, int nt);
 // Second half kick of every moving particle. Returns whether every v and w is finite; the largest
-// |v|^2 goes to *max_v2. `clump_of` and `clump_asleep` (or null): a sphere of an awake clump only
-// counts in both (ClumpSet::EndStep sets its v and w next).
-bool Kick(const Workspace& m, Particles& p, double dt, bool sleeping, int nt, double* max_v2,
-          const int32_t* clump_of, const uint8_t* clump_asleep);
+// |v|^2 goes to *max_v2.
+bool Kick(const Workspace& m, Particles& p, double dt, bool sleeping, int nt, double* max_v2);
 
 // --- dem/neighbor_build.cpp: the neighbour list ------------------------------------------------
 

@@ -233,7 +233,7 @@ StepStatus System::Step(const std::function<void()>& motion) {
   // First half kick and drift (with sleeping, of the awake particles only).
   if (sleeping && m.stale.active) internal::RefreshActive(m, p_, nt);
   lap(phase_times_.sleep);
-  // The clump of each storage index: KickDrift and Kick leave a clump's spheres to it.
+  // The clump of each storage index: KickDrift leaves a clump's spheres to it.
   const int32_t* clump_of = clumps_.clump_of_index(p_.size());
   double max_v2 = internal::KickDrift(m, p_, config_, nt, clump_of);
   if (have_clumps) {  // rigid clumps (dem/clump.h): move the bodies, place their spheres
@@ -274,9 +274,7 @@ StepStatus System::Step(const std::function<void()>& motion) {
   if (sleeping && m.stale.active) internal::RefreshActive(m, p_, nt);
   lap(phase_times_.sleep);
   max_v2 = 0;
-  clump_of = clumps_.clump_of_index(p_.size());  // (a build this step reindexed them)
-  bool finite = internal::Kick(m, p_, dt, sleeping, nt, &max_v2, clump_of,
-                               clump_of != nullptr ? clumps_.state().asleep.data() : nullptr);
+  bool finite = internal::Kick(m, p_, dt, sleeping, nt, &max_v2);
   if (have_clumps && !clumps_.EndStep(p_, config_.gravity, dt, nt)) finite = false;
   time_ += dt;
   ++step_count_;
