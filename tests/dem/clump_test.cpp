@@ -370,9 +370,9 @@ MixedRun RunMixed(int threads) {
   return out;
 }
 
-// The mixed run's state hash as the step made it before KickDrift and Kick left a clump's spheres
-// to ClumpSet (they kicked and drifted them, then BeginStep and EndStep set them again) and
-// BeginStep found the clumps to wake from the spheres (main of 2026-12-07, 91bf66f): those paths
+// The mixed run's state hash as the step made it before KickDrift left a clump's spheres to
+// ClumpSet (it kicked and drifted them, then BeginStep set them again), BeginStep wrote their
+// 1/|w| and found the clumps to wake from the spheres (main of 2026-12-07, 91bf66f): those paths
 // claim the same bits.
 constexpr uint64_t kMixedRunHash = 0xeebd598c07c768faull;
 
