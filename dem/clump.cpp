@@ -429,18 +429,12 @@ ClumpSet::BeginReport ClumpSet::BeginStep(Particles& p, double dt, int threads, 
   // wakes whole, at rest in equilibrium like a waking sphere. The clumps to wake are found from
   // the spheres in storage order where the clump of each storage index is known (one sequential
   // pass), else from each sleeping clump's spheres (which lie anywhere in storage).
-  const bool indexed = clump_of_index_.size() == p.size();
+  const int32_t* clump_of = clump_of_index(p.size());
+  const bool indexed = clump_of != nullptr;
   if (indexed) {
     waking_.assign(static_cast<size_t>(n), 0);
-    const uint8_t* awake = p.awake.data();
-    const uint8_t* asleep = s.asleep.data();
-    const int32_t* clump_of = clump_of_index_.data();
-    uint8_t* waking = waking_.data();
-    const int64_t spheres = static_cast<int64_t>(p.size());
-    for (int64_t i = 0; i < spheres; ++i) {  // (no branch: awake and asleep follow no pattern)
-      const int32_t c = std::max(clump_of[i], 0);
-      waking[c] |= static_cast<uint8_t>((awake[i] != 0) & (clump_of[i] >= 0) & asleep[c]);
-    }
+    for (size_t i = 0; i < p.size(); ++i)
+      if (p.awake[i] != 0 && clump_of[i] >= 0 && s.asleep[clump_of[i]]) waking_[clump_of[i]] = 1;
   }
   for (int64_t c = 0; c < n; ++c) {
     if (!s.asleep[c]) continue;
