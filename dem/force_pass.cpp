@@ -18,13 +18,14 @@ namespace {
 // ~40,000 of 537,718), scattered through arrays far larger than the caches, and its time went to
 // waiting on their loads (perf: the candidate test's x[j], the gather's v, w and 1/|w| of j, the
 // scatter's f and t of j). So it asks for them ahead: each candidate's partner data when the
-// candidate is tested (the gather and scatter come a batch later), the partner kPrefetchAhead
-// slots on, and the particle kPrefetchAheadI visits on. Prefetches change no result. Measured in
+// candidate is tested (the gather and scatter come a batch later), and the position of both
+// particles of the slot kPrefetchAhead slots on. Prefetches change no result. Measured in
 // journal section 33 (paper_step.csv): the paper snow pass's mid-dig step 1.14x faster; an
 // all-awake bed that fits the caches (dig_7mm) 9% slower with them, so they are used only when
 // visiting the busy list.
 constexpr int32_t kPrefetchAhead = 16;
-constexpr int32_t kPrefetchAheadI = 4;
+// A batch is evaluated once fewer than this many contacts would still fit in it.
+constexpr size_t kBatchRoom = 8;
 
 // Stores a vector into three structure-of-arrays columns at entry b.
 inline void Put(double* cx, double* cy, double* cz, size_t b, const Vec3& a) {
@@ -207,10 +208,9 @@ struct PassArrays {
   const double *radius, *mass, *inv_mass, *inv_inertia;
   const int32_t* mat;
   const uint8_t* awake;
-  const int32_t* busy;               // the visited particles with sleeping (compact)
   const double* inv_spin = nullptr;  // with own spins: 1/|w| of each (Workspace::inv_spin)
   // The near list (Workspace::near_k): each slot's partner and history.
-  const int32_t *near_j, *near_off, *near_count;
+  const int32_t *near_j, *near_i;
   int32_t last_slot;  // the near list's last slot
   Vec3* shear;
   uint8_t* touched;
@@ -235,11 +235,11 @@ struct SlabTally {
   int64_t touching = 0, wall_touching = 0;
 };
 
-// Particle-particle forces of slab s, block of particles by block. The hot loop of the step (the
-// larger part of a dig's time, docs/dem.md): its three stages (find the touching pairs,
-// gather and evaluate them in a batch, accumulate) stay in one body of some 120 lines, as before
+// Particle-particle forces of slab s, batch by batch over its near slots. The hot loop of the step
+// (the larger part of a dig's time, docs/dem.md): its three stages (find the touching pairs,
+// gather and evaluate them in a batch, accumulate) stay in one body of some 100 lines, as before
 // System was split, so that the compiler keeps the arrays in registers across them and no call
-// sits inside the block loop. Splitting it further was not tried.
+// sits inside the batch loop. Splitting it further was not tried.
 template <bool kPrefetch>
 void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch& batch,
                     SlabTally* tally) {
@@ -253,12 +253,10 @@ void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch
   const double* inv_inertia = a.inv_inertia;
   const int32_t* mat = a.mat;
   const int32_t* near_j = a.near_j;
-  const int32_t* near_off = a.near_off;
-  const int32_t* near_count = a.near_count;
+  const int32_t* near_i = a.near_i;
   Vec3* shear = a.shear;
   uint8_t* touched = a.touched;
-  const int32_t* busy = a.busy;
-  const bool compact = a.compact, one_material = a.one_material >= 0, alike = a.alike;
+  const bool one_material = a.one_material >= 0, alike = a.alike;
   const double alike_rsum = a.alike_rsum;
   const int nm = a.nm;
   const int32_t last_slot = a.last_slot;
@@ -266,45 +264,27 @@ void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch
   const double* inv_spin = a.inv_spin != nullptr ? a.inv_spin : radius;
   double worst = tally->worst;
   int64_t touching = tally->touching;
-  // Particles are visited by position in the slab (all of them), or, with sleeping, through the
-  // list of busy ones.
-  const int32_t slab_end = compact ? m.slab_busy[s + 1] : m.list.slab_start[s + 1];
-  int32_t block = compact ? m.slab_busy[s] : m.list.slab_start[s];
-  int32_t resume = 0;  // near pairs of the block's first particle already done (pieces)
-  while (block < slab_end) {
-    // 1. Find the touching pairs of a block of particles without branching on the outcome (a
+  // The slab's slots: its visited particles' near pairs, one after another in visiting order.
+  int32_t q = m.slab_slot[s];
+  const int32_t q_end = m.slab_slot[s + 1];
+  while (q < q_end) {
+    // 1. Find the touching pairs among the next slots without branching on the outcome (a
     //    contact is a coin toss for the branch predictor): write every candidate at slot nb and
     //    advance nb only for a contact. `touching` remembers which pairs touched at the last
-    //    step; a pair that comes into contact starts with no tangential history.
+    //    step; a pair that comes into contact starts with no tangential history. The slots are
+    //    taken in runs of at most the batch's room, so none overflows it, until little room is
+    //    left; the batch then ends wherever it is, even inside one particle's pairs (the sums of
+    //    step 3 add up in slot order whatever the batches).
     size_t nb = 0;
-    int32_t block_end = block;
-    bool piece = false;  // the batch ends inside the near pairs of busy[block_end]
-    int32_t q_end = 0;
-    for (; block_end < slab_end; ++block_end) {
-      const int32_t i = compact ? busy[block_end] : block_end;
-      if constexpr (kPrefetch) {
-        const int32_t ahead = std::min(block_end + kPrefetchAheadI, slab_end - 1);
-        const int32_t ia = compact ? busy[ahead] : ahead;
-        __builtin_prefetch(&near_off[ia]);
-        __builtin_prefetch(&near_count[ia]);
-        __builtin_prefetch(&x[ia]);
-        __builtin_prefetch(&radius[ia]);
-      }
-      const int32_t q_begin = near_off[i] + (block_end == block ? resume : 0);
-      q_end = near_off[i] + near_count[i];
-      if (nb + static_cast<size_t>(q_end - q_begin) > ContactBatch::K) {
-        if (nb > 0) break;  // the next batch takes it
-        q_end = q_begin + ContactBatch::K;
-        piece = true;
-      }
-      const Vec3 xi = x[i];
-      const double ri = radius[i];
-      // Only the near pairs can touch (see Workspace::near_k); none joins two sleepers (the near
-      // list is made again whenever a particle wakes or falls asleep).
-      for (int32_t q = q_begin; q < q_end; ++q) {
-        const int32_t j = near_j[q];
+    while (q < q_end && nb + kBatchRoom <= ContactBatch::K) {
+      const int32_t run_end =
+          static_cast<int32_t>(std::min<int64_t>(q_end, q + (ContactBatch::K - nb)));
+      for (; q < run_end; ++q) {
+        const int32_t i = near_i[q], j = near_j[q];
         if constexpr (kPrefetch) {
-          __builtin_prefetch(&x[near_j[std::min(q + kPrefetchAhead, last_slot)]]);
+          const int32_t ahead = std::min(q + kPrefetchAhead, last_slot);
+          __builtin_prefetch(&x[near_j[ahead]]);
+          __builtin_prefetch(&x[near_i[ahead]]);
           __builtin_prefetch(&v[j]);
           __builtin_prefetch(&w[j]);
           __builtin_prefetch(&f[j], 1);
@@ -312,8 +292,10 @@ void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch
           __builtin_prefetch(&inv_spin[j]);
           __builtin_prefetch(&shear[q]);
         }
-        const double rsum = alike ? alike_rsum : ri + radius[j];
-        const bool contact = Norm2(x[j] - xi) < rsum * rsum;
+        // Only the near pairs can touch (see Workspace::near_k); none joins two sleepers (the
+        // near list is made again whenever a particle wakes or falls asleep).
+        const double rsum = alike ? alike_rsum : radius[i] + radius[j];
+        const bool contact = Norm2(x[j] - x[i]) < rsum * rsum;
         batch.i[nb] = i;
         batch.j[nb] = j;
         batch.k[nb] = q;
@@ -321,7 +303,6 @@ void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch
         touched[q] = contact;
         nb += contact;
       }
-      if (piece) break;
     }
     // Gather what the force law needs, one contact at a time (no branches). When all the
     // particles are of one material (the common case), so is every pair.
@@ -384,14 +365,6 @@ void SlabPairForces(const PassArrays& a, const Workspace& m, int s, ContactBatch
       worst = std::max(worst, batch.overlap[b]);
     }
     touching += static_cast<int64_t>(nb);
-    if (piece) {  // go on with the same particle
-      const int32_t i = compact ? busy[block_end] : block_end;
-      resume = q_end - near_off[i];
-      block = block_end;
-    } else {
-      resume = 0;
-      block = block_end;
-    }
   }
   tally->worst = worst;
   tally->touching = touching;
@@ -472,10 +445,8 @@ PassArrays TakeArrays(Workspace& m, Particles& p, const SystemConfig& config, in
   a.inv_inertia = p.inv_inertia.data();
   a.mat = p.material.data();
   a.awake = p.awake.data();
-  a.busy = m.busy.data();
   a.near_j = m.near_j.data();
-  a.near_off = m.near_off.data();
-  a.near_count = m.near_count.data();
+  a.near_i = m.near_i.data();
   a.last_slot = static_cast<int32_t>(std::max<int64_t>(0, m.near_pairs - 1));
   a.shear = m.near_shear.data();  // the near slots hold the history (Workspace::near_k)
   a.touched = m.near_touch.data();
@@ -522,6 +493,7 @@ void ComputeForces(Workspace& m, Particles& p, const SystemConfig& config, int n
   if (compact && m.stale.busy) RefreshBusy(m, p, nt);
   if (m.stale.near) BuildNear(m, p, compact, nt);
   if (m.stale.walls) ListWallVisits(m, compact, nt);
+  if (!m.near_owners) ListSlotOwners(m, p, compact, nt);
   const double t_pairs = Now();
   times->near += t_pairs - t_near;
   PassArrays arrays = TakeArrays(m, p, config, nm);

@@ -52,6 +52,9 @@ void RefreshBusy(Workspace& m, const Particles& p, int nt);
 void ListWallVisits(Workspace& m, bool compact, int nt);
 // Makes the near list (Workspace::near_k) and the force pass's slab order.
 void BuildNear(Workspace& m, const Particles& p, bool sleeping, int nt);
+// Makes Workspace::near_i and slab_slot for the present near list (after BuildNear, or after a
+// restored state brought its near list without them).
+void ListSlotOwners(Workspace& m, const Particles& p, bool sleeping, int nt);
 
 // --- dem/force_pass.cpp: particle-particle and particle-plane contacts -------------------------
 

@@ -240,12 +240,18 @@ struct Workspace {
   // writes it in one dense stream instead of scattered over the whole list. FlushNear puts it
   // back into shear and touching (Stale::list_history), before anything else reads those or the
   // list changes.
-  std::vector<int32_t> near_k;              // list pair index of each slot (num_pairs at most)
-  std::vector<int32_t> near_j;              // and its partner
-  std::vector<Vec3> near_shear;             // its tangential history [m]
-  std::vector<uint8_t> near_touch;          // whether it touched at the last force evaluation
-  std::vector<int32_t> near_off;            // first slot of each particle (N)
-  std::vector<int32_t> near_count;          // near pairs of each particle (N)
+  std::vector<int32_t> near_k;      // list pair index of each slot (num_pairs at most)
+  std::vector<int32_t> near_j;      // and its partner
+  std::vector<Vec3> near_shear;     // its tangential history [m]
+  std::vector<uint8_t> near_touch;  // whether it touched at the last force evaluation
+  std::vector<int32_t> near_off;    // first slot of each particle (N)
+  std::vector<int32_t> near_count;  // near pairs of each particle (N)
+  // Made from near_off and near_count (ListSlotOwners), not saved: the owner of each slot, and
+  // each slab's slots slab_slot[s] .. slab_slot[s + 1] (num_slabs + 1), for the force pass's
+  // flat walk over the slots. near_owners: they describe the present near list.
+  std::vector<int32_t> near_i;
+  std::vector<int32_t> slab_slot;
+  bool near_owners = false;
   std::vector<int32_t> scratch_near_k;      // BuildNear's first pass (num_pairs)
   double near_skin = 0;                     // [m]
   double near_bound = 0;                    // [m]

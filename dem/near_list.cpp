@@ -222,11 +222,43 @@ void BuildNear(Workspace& m, const Particles& p, bool sleeping, int nt) {
   ResizeWithRoom(m.near_touch, slots);
   const int64_t visits = sleeping ? static_cast<int64_t>(m.busy.size()) : static_cast<int64_t>(n);
   PackSlots(m, visits, sleeping, nt);
+  m.near_pairs = slots;
+  ListSlotOwners(m, p, sleeping, nt);
   m.stale.list_history = true;
   m.near_bound = 0;
   m.stale.near = false;
   ++m.near_builds;
-  m.near_pairs = slots;
+}
+
+void ListSlotOwners(Workspace& m, const Particles& p, bool sleeping, int nt) {
+  const int ns = m.list.num_slabs();
+  const int32_t* busy = m.busy.data();
+  const int32_t* near_off = m.near_off.data();
+  const int32_t* near_count = m.near_count.data();
+  // Slots lie slab after slab in visiting order (PlaceSlots): a slab's start is its first
+  // visited particle's first slot, or the previous slab's end for a slab with none.
+  m.slab_slot.resize(ns + 1);
+  int32_t at = 0;
+  for (int sl = 0; sl < ns; ++sl) {
+    const int64_t lo = sleeping ? m.slab_busy[sl] : m.list.slab_start[sl];
+    const int64_t hi = sleeping ? m.slab_busy[sl + 1] : m.list.slab_start[sl + 1];
+    m.slab_slot[sl] = at;
+    if (hi > lo) {
+      const int64_t last = sleeping ? busy[hi - 1] : hi - 1;
+      at = near_off[last] + near_count[last];
+    }
+  }
+  m.slab_slot[ns] = at;
+  ResizeWithRoom(m.near_i, m.near_pairs);
+  int32_t* near_i = m.near_i.data();
+  const int64_t visits =
+      sleeping ? static_cast<int64_t>(m.busy.size()) : static_cast<int64_t>(p.size());
+#pragma omp parallel for schedule(static) num_threads(nt)
+  for (int64_t a = 0; a < visits; ++a) {
+    const int32_t i = static_cast<int32_t>(sleeping ? busy[a] : a);
+    for (int32_t q = near_off[i]; q < near_off[i] + near_count[i]; ++q) near_i[q] = i;
+  }
+  m.near_owners = true;
 }
 
 }  // namespace dem::internal

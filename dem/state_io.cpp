@@ -163,6 +163,7 @@ void System::RestoreState(const std::vector<char>& bytes) {
     ws_->bond = internal::BondWork{};
   }
   ws_->bond.hot_ahead = false;  // (BondFields marked the bonds' index stale)
+  ws_->near_owners = false;     // made again from the restored near list (ListSlotOwners)
   if (!a.done()) throw std::runtime_error("state: bytes left over");
 }
 
