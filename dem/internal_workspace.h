@@ -66,11 +66,11 @@ struct Alike {
   double radius = 0, mass = 0, inv_mass = 0, inv_inertia = 0;  // [m], [kg], [1/kg], [1/(kg m^2)]
 };
 
-// Contacts gathered before one vectorised force evaluation (a block of particles' worth; a
-// particle with more near pairs than that comes in pieces).
+// Contacts gathered before one vectorised force evaluation (the touching pairs among a run of
+// near slots; a batch may end inside one particle's pairs).
 constexpr int kBatchContacts = 64;  // 46 arrays x 64 x 8 B = 23 KB: stays in L1
 
-// Per-thread scratch of the force pass: the particle-pair contacts of a block of particles,
+// Per-thread scratch of the force pass: the particle-pair contacts of a run of near slots,
 // gathered so their forces can be computed in one vectorised loop (structure of arrays). Fixed
 // arrays in one block: every column sits at a constant offset from one base register.
 struct alignas(64) ContactBatch {
