@@ -421,20 +421,27 @@ void FreeRotation(int k, double tau, const Vec3& inertia, Quat* q, Vec3* l) {
 }  // namespace
 
 ClumpSet::BeginReport ClumpSet::BeginStep(Particles& p, double dt, int threads, uint8_t* moved,
-                                          double* inv_spin) {
+                                          double* inv_spin, const std::vector<int32_t>* awake) {
   BeginReport report;
   Clumps& s = state_;
   const int64_t n = static_cast<int64_t>(s.size());
   // A sleeping clump with an awake sphere (touched, in a mesh zone, or sleeping switched off)
-  // wakes whole, at rest in equilibrium like a waking sphere. The clumps to wake are found from
-  // the spheres in storage order where the clump of each storage index is known (one sequential
-  // pass), else from each sleeping clump's spheres (which lie anywhere in storage).
+  // wakes whole, at rest in equilibrium like a waking sphere. Where the clump of each storage
+  // index is known, the clumps to wake are found from the awake spheres (the list given, else
+  // one sequential pass over storage), else from each sleeping clump's spheres (which lie
+  // anywhere in storage).
   const int32_t* clump_of = clump_of_index(p.size());
   const bool indexed = clump_of != nullptr;
   if (indexed) {
     waking_.assign(static_cast<size_t>(n), 0);
-    for (size_t i = 0; i < p.size(); ++i)
+    const auto mark = [&](size_t i) {
       if (p.awake[i] != 0 && clump_of[i] >= 0 && s.asleep[clump_of[i]]) waking_[clump_of[i]] = 1;
+    };
+    if (awake != nullptr) {
+      for (const int32_t i : *awake) mark(static_cast<size_t>(i));
+    } else {
+      for (size_t i = 0; i < p.size(); ++i) mark(i);
+    }
   }
   for (int64_t c = 0; c < n; ++c) {
     if (!s.asleep[c]) continue;
@@ -496,7 +503,10 @@ ClumpSet::BeginReport ClumpSet::BeginStep(Particles& p, double dt, int threads, 
     for (int32_t e = s.first[c]; e < s.first[c + 1]; ++e) {
       const int32_t i = index_[e];
       const Vec3 r = Rotate(s.q[c], shape.offsets[e - s.first[c]]);
-      const Vec3 before = x0 + Rotate(q0, shape.offsets[e - s.first[c]]);
+      // Where the sphere was: with the index, KickDrift left it where the last placement (this
+      // loop, Place) put it, x0 + Rotate(q0, offset), bit for bit; without, it drifted as a free
+      // sphere, and the placement is made again.
+      const Vec3 before = indexed ? p.x[i] : x0 + Rotate(q0, shape.offsets[e - s.first[c]]);
       p.x[i] = s.x[c] + r;
       p.v[i] = s.v[c] + Cross(w, r);
       p.w[i] = w;

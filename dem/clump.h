@@ -162,8 +162,11 @@ class ClumpSet {
   // `moved` (one flag per particle, or null): set for the spheres of each clump it wakes, which
   // move from this step on (Workspace::moved, for the neighbour list's partial build).
   // `inv_spin` (one per particle, or null): 1/|w| of each sphere it places (Workspace::inv_spin).
+  // `awake` (or null): the storage index of every awake sphere, in any order (Workspace::active,
+  // made since the last change of an awake flag): a waking clump is found from these alone
+  // instead of from every sphere, a serial pass over all of storage each step.
   BeginReport BeginStep(Particles& p, double dt, int threads, uint8_t* moved = nullptr,
-                        double* inv_spin = nullptr);
+                        double* inv_spin = nullptr, const std::vector<int32_t>* awake = nullptr);
   // After the force pass: sums each awake clump's sphere forces (+ m g) and torques about its CoM
   // (in template order), second half kick, sphere velocities. Returns false on a non-finite state.
   bool EndStep(Particles& p, const Vec3& gravity, double dt, int threads);

@@ -240,8 +240,10 @@ StepStatus System::Step(const std::function<void()>& motion) {
     // With clump_of, each sphere KickDrift left is placed, its 1/|w| with it; without, the spins
     // were set after the kick and the force pass makes them.
     double* inv_spin = clump_of != nullptr && m.inv_spin_kicked ? m.inv_spin.data() : nullptr;
-    const ClumpSet::BeginReport r = clumps_.BeginStep(
-        p_, dt, nt, m.moved.size() == p_.size() ? m.moved.data() : nullptr, inv_spin);
+    // With sleeping, the active list (made above) holds every awake sphere: a waking clump has one.
+    const ClumpSet::BeginReport r =
+        clumps_.BeginStep(p_, dt, nt, m.moved.size() == p_.size() ? m.moved.data() : nullptr,
+                          inv_spin, sleeping && !m.stale.active ? &m.active : nullptr);
     m.inv_spin_kicked = inv_spin != nullptr;
     max_v2 = std::max(max_v2, r.max_member_speed2);
     if (r.woke) {  // their pairs are listed: only the visiting lists change

@@ -372,8 +372,9 @@ MixedRun RunMixed(int threads) {
 
 // The mixed run's state hash as the step made it before KickDrift left a clump's spheres to
 // ClumpSet (it kicked and drifted them, then BeginStep set them again), BeginStep wrote their
-// 1/|w| and found the clumps to wake from the spheres (main of 2026-12-07, 91bf66f): those paths
-// claim the same bits.
+// 1/|w| and found the clumps to wake from the spheres (main of 2026-12-07, 91bf66f), found them
+// from the active list alone and took a sphere's position before the step from storage instead
+// of placing it again: those paths claim the same bits.
 constexpr uint64_t kMixedRunHash = 0xeebd598c07c768faull;
 
 TEST(ClumpBedTest, SpheresAndClumpsOneVsTwoThreadsBitForBit) {
