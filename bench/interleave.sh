@@ -11,7 +11,9 @@
 # Environment: BINS (required), NRUNS (5), KEY (the JSON figure: particle_steps_per_s for
 # settle, ms_per_step for step), LABEL (a word for the CSV rows), CSV (interleaved_pairs.csv),
 # MACHINE (hostname), QUIET_WAIT (seconds, default 0: before each run, wait up to this long until
-# no compiler, test binary or other scoopsim runs on the host, as a shared host needs).
+# no compiler, test binary or other scoopsim runs on the host, as a shared host needs), PHASES
+# (1: also a row per run for each of the JSON's other ms_* figures, the phases of `bench step`,
+# and their medians at the end).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 : "${BINS:?set BINS to the binaries to compare, first = baseline}"
@@ -32,27 +34,30 @@ for r in $(seq "$NRUNS"); do
     wait_quiet
     line=$("$b" "$@")
     echo "$b $line" | tee -a "$log"
-    /usr/bin/python3 - "$line" "$CSV" "$LABEL" "$b" "$r" "$KEY" <<'PY'
+    /usr/bin/python3 - "$line" "$CSV" "$LABEL" "$b" "$r" "$KEY" "${PHASES:-0}" <<'PY'
 import datetime, json, sys
 d = json.loads(sys.argv[1])
-_, csv, label, binary, run, key = sys.argv[1:]
+_, csv, label, binary, run, key, phases = sys.argv[1:]
+keys = [key] + ([k for k in d if k.startswith("ms_") and k != key] if phases == "1" else [])
+now = datetime.datetime.utcnow().isoformat(timespec="seconds")
 with open(csv, "a") as f:
-    f.write(",".join([datetime.datetime.utcnow().isoformat(timespec="seconds"), label, binary, run,
-                      key, str(d[key]), d.get("state_hash", "")]) + "\n")
+    for k in keys:
+        f.write(",".join([now, label, binary, run, k, str(d[k]), d.get("state_hash", "")]) + "\n")
 PY
   done
 done
-/usr/bin/python3 - "$log" "$KEY" $BINS <<'PY'
+/usr/bin/python3 - "$log" "$KEY" "${PHASES:-0}" $BINS <<'PY'
 import json, statistics, sys
-log, key, bins = sys.argv[1], sys.argv[2], sys.argv[3:]
-runs = {b: [] for b in bins}
-for l in open(log):
-    b, j = l.split(" ", 1)
-    runs[b].append(json.loads(j)[key])
-base = statistics.median(runs[bins[0]])
-for b in bins:
-    v = runs[b]
-    m = statistics.median(v)
-    print(f"{b}: {key} median {m:.6g} (min {min(v):.6g}, max {max(v):.6g}, {len(v)} runs); "
-          f"ratio to {bins[0]}: {m / base:.4f}")
+log, key, phases, bins = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
+lines = [l.split(" ", 1) for l in open(log)]
+keys = [key] + ([k for k in json.loads(lines[0][1]) if k.startswith("ms_") and k != key]
+                if phases == "1" else [])
+for k in keys:
+    runs = {b: [json.loads(j)[k] for bb, j in lines if bb == b] for b in bins}
+    base = statistics.median(runs[bins[0]])
+    for b in bins:
+        v = runs[b]
+        m = statistics.median(v)
+        print(f"{b}: {k} median {m:.6g} (min {min(v):.6g}, max {max(v):.6g}, {len(v)} runs); "
+              f"ratio to {bins[0]}: {m / base if base else float('nan'):.4f}")
 PY
