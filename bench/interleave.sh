@@ -50,7 +50,9 @@ done
 import json, statistics, sys
 log, key, phases, bins = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
 lines = [l.split(" ", 1) for l in open(log)]
-keys = [key] + ([k for k in json.loads(lines[0][1]) if k.startswith("ms_") and k != key]
+# (the phases every binary's JSON has: an older binary may lack a newer one's)
+common = set.intersection(*(set(json.loads(j)) for _, j in lines))
+keys = [key] + ([k for k in json.loads(lines[0][1]) if k.startswith("ms_") and k != key and k in common]
                 if phases == "1" else [])
 for k in keys:
     runs = {b: [json.loads(j)[k] for bb, j in lines if bb == b] for b in bins}
