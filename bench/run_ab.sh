@@ -55,8 +55,9 @@ for r in $(seq "$NRUNS"); do
     echo "$b run $r: cpu $cpu s, wall $wall s, state hash $hash"
     now=$(date -u +%Y-%m-%dT%H:%M:%S)
     echo "$now,$LABEL,$SCENE,$b,$r,$THREADS,$cpu,$wall,$hash" >>"$CSV"
-    # "scoopsim: dig: W s wall (...): pairs X s (P%), integrate Y s (Q%), ..."
-    grep -m1 'dig: .* s wall' "$work/err" | sed 's/.*): //' | tr ',' '\n' |
+    # "scoopsim: dig: W s wall (...): pairs X s (P%), integrate Y s (Q%), ..."; none without a
+    # dig (a plain run, a failed one): no rows, and the loop goes on
+    { grep -m1 'dig: .* s wall' "$work/err" || true; } | sed 's/.*): //' | tr ',' '\n' |
       sed -n 's/^ *\([a-z]*\) \([0-9.]*\) s .*/\1,\2/p' |
       while IFS=, read -r phase sec; do echo "$now,$LABEL,$b,$r,$phase,$sec" >>"$PCSV"; done
     rm -f "$work"/run.*
