@@ -49,13 +49,13 @@ done
 /usr/bin/python3 - "$log" "$KEY" "${PHASES:-0}" $BINS <<'PY'
 import json, statistics, sys
 log, key, phases, bins = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
-lines = [l.split(" ", 1) for l in open(log)]
+runs_of = [(b, json.loads(j)) for b, j in (l.split(" ", 1) for l in open(log))]
 # (the phases every binary's JSON has: an older binary may lack a newer one's)
-common = set.intersection(*(set(json.loads(j)) for _, j in lines))
-keys = [key] + ([k for k in json.loads(lines[0][1]) if k.startswith("ms_") and k != key and k in common]
+common = set.intersection(*(set(d) for _, d in runs_of))
+keys = [key] + ([k for k in runs_of[0][1] if k.startswith("ms_") and k != key and k in common]
                 if phases == "1" else [])
 for k in keys:
-    runs = {b: [json.loads(j)[k] for bb, j in lines if bb == b] for b in bins}
+    runs = {b: [d[k] for bb, d in runs_of if bb == b] for b in bins}
     base = statistics.median(runs[bins[0]])
     for b in bins:
         v = runs[b]
